@@ -1,0 +1,869 @@
+"""Build the packed kernel arrays of one LPM case from a parameter set.
+
+The sagittal model (frontal and rear modes) and the coronal model (near and
+far side) share the body chain of :mod:`models.lpm.kernel`; this module places
+the body in its initial posture, places the vehicle surfaces, belts and airbag
+around it, and converts everything into the float arrays the kernel reads.
+
+Coordinates: origin at the occupant's initial H-point, z up; x forward
+(sagittal) or toward the struck side (coronal). Vehicle-fixed surfaces are
+given at mid track in the parameter set; a seat moved forward by
+``seat_track_mm`` brings the occupant closer to them.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import numpy.typing as npt
+
+from models.impact_mode import ImpactMode
+from models.lpm import kernel as K
+from models.lpm.params import ParameterSet
+from models.notification import Body, Occupant
+
+__all__ = ["ContactSpec", "Model", "Restraints", "build_model"]
+
+FloatArray = npt.NDArray[np.float64]
+
+#: Clearance added to surfaces that touch the occupant in the neutral posture,
+#: m: keeps them exactly force-free at t = 0 despite rounding.
+_CLEAR = 1e-6
+_NEVER = 1e9
+
+
+@dataclass(frozen=True)
+class Restraints:
+    """Restraint timing resolved from the pulse and the notification.
+
+    Attributes
+    ----------
+    airbag : bool
+        Frontal airbag present and deployed.
+    airbag_fire_s : float
+        Firing time, s (ignored without airbag).
+    belted : bool
+    pretensioner_fire_s : float or None
+        Pretensioner firing time, s; None when it does not fire.
+    """
+
+    airbag: bool
+    airbag_fire_s: float
+    belted: bool
+    pretensioner_fire_s: float | None
+
+
+@dataclass(frozen=True)
+class ContactSpec:
+    """A contact between a body point (circle) and a surface segment."""
+
+    name: str
+    k_body: int
+    p: float
+    r: float
+    radius: float
+    a: tuple[float, float]
+    b: tuple[float, float]
+    motion: tuple[float, float] = (0.0, 0.0)
+    channel: int = 0
+    law: int = 0
+    stiff: float = 0.0
+    stiff3: float = 0.0
+    damp: float = 0.0
+    fcap: float = 0.0
+    give: float = 10.0
+    k_bottom: float = 0.0
+    ramp: float = 0.005
+    enabled: bool = True
+
+    def row(self, side: float) -> list[float]:
+        """The contact as a row of the kernel's contact table.
+
+        ``side`` (+1 or -1) orients the surface normal toward the occupant.
+        """
+        return [
+            float(self.k_body),
+            self.p,
+            self.r,
+            self.radius,
+            self.a[0],
+            self.a[1],
+            self.b[0],
+            self.b[1],
+            self.motion[0],
+            self.motion[1],
+            float(self.channel),
+            float(self.law),
+            self.stiff,
+            self.stiff3,
+            self.damp,
+            self.fcap,
+            self.give,
+            self.k_bottom,
+            self.ramp,
+            1.0 if self.enabled else 0.0,
+            side,
+        ]
+
+
+@dataclass(frozen=True)
+class Model:
+    """Packed arrays of one case (see :mod:`models.lpm.kernel` for layouts).
+
+    Attributes
+    ----------
+    plane : str
+        "sagittal" or "coronal".
+    ll : ndarray, shape (5,)
+    mb : ndarray, shape (6, 5)
+    jt : ndarray, shape (4, 6)
+    ch : ndarray, shape (6,)
+    se : ndarray, shape (4,)
+    ct : ndarray, shape (nc, 20)
+    bt : ndarray, shape (nb, 20)
+    bag : ndarray, shape (8,)
+    y0 : ndarray, shape (12 + 2 nb,)
+    contact_names, belt_names : tuple of str
+    """
+
+    plane: str
+    ll: FloatArray
+    mb: FloatArray
+    jt: FloatArray
+    ch: FloatArray
+    se: FloatArray
+    ct: FloatArray
+    bt: FloatArray
+    bag: FloatArray
+    y0: FloatArray
+    contact_names: tuple[str, ...]
+    belt_names: tuple[str, ...]
+    info: dict[str, float] = field(default_factory=dict)
+
+
+def _u(a: float) -> np.ndarray:
+    return np.array([math.sin(a), math.cos(a)])
+
+
+def _w(a: float) -> np.ndarray:
+    return np.array([math.cos(a), -math.sin(a)])
+
+
+def _point(q: np.ndarray, ll: np.ndarray, k: int, p: float, r: float) -> np.ndarray:
+    """Position of a body point (same convention as the kernel; d = 0 here), m."""
+    jx = np.zeros(K.NQ)
+    jz = np.zeros(K.NQ)
+    px, pz, _, _ = K.kin(q, np.zeros(K.NQ), ll, k, p, r, jx, jz, 1.0)
+    return np.array([px, pz])
+
+
+def _seg(
+    center: np.ndarray, direction: np.ndarray, half: float
+) -> tuple[tuple[float, float], tuple[float, float]]:
+    a = center - half * direction
+    b = center + half * direction
+    return (float(a[0]), float(a[1])), (float(b[0]), float(b[1]))
+
+
+def _body_arrays(
+    ps: ParameterSet, b: str, lateral: bool
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    pre = f"body.{b}."
+    ll = np.array(
+        [0.0, ps[pre + "length.lumbar"], ps[pre + "length.thorax"], ps[pre + "length.neck"], 0.0]
+    )
+    rib_r = ps[pre + "chest_half_width"] if lateral else ps[pre + "sternum_offset"]
+    mb = np.array(
+        [
+            [0, 0.0, 0.0, ps[pre + "mass.pelvis"], 0.0],
+            [1, ps[pre + "cg.abdomen"], 0.0, ps[pre + "mass.abdomen"], ps[pre + "inertia.abdomen"]],
+            [2, ps[pre + "cg.thorax"], 0.0, ps[pre + "mass.thorax"], ps[pre + "inertia.thorax"]],
+            [5, ps[pre + "sternum_height"], rib_r, ps[pre + "mass.sternum"], 0.0],
+            [3, ps[pre + "cg.neck"], 0.0, ps[pre + "mass.neck"], ps[pre + "inertia.neck"]],
+            [
+                4,
+                ps[pre + "cg.head_up"],
+                ps[pre + "cg.head_forward"],
+                ps[pre + "mass.head"],
+                ps[pre + "inertia.head"],
+            ],
+        ],
+        dtype=np.float64,
+    )
+    if lateral:
+        mb[5, 2] = 0.0  # head CG on the mid-sagittal plane
+    if lateral:
+        ch = np.array(
+            [
+                ps[pre + "rib.stiffness"],
+                0.0,
+                ps[pre + "rib.damping"],
+                ps[pre + "rib.bottom_deflection"],
+                ps[pre + "rib.bottom_stiffness"],
+                0.0,
+            ]
+        )
+    else:
+        ch = np.array(
+            [
+                ps[pre + "chest.stiffness"],
+                ps[pre + "chest.stiffness3"],
+                ps[pre + "chest.damping"],
+                ps[pre + "chest.bottom_deflection"],
+                ps[pre + "chest.bottom_stiffness"],
+                ps["frontal.belt.sternum_share"],
+            ]
+        )
+    return ll, mb, ch
+
+
+def _joint_table(ps: ParameterSet, b: str, lateral: bool, q0: np.ndarray) -> FloatArray:
+    names = ("lumbar", "thoracic", "lower_neck", "upper_neck")
+    jt = np.zeros((4, 6))
+    for j, jn in enumerate(names):
+        if lateral:
+            pre = f"body.{b}.joint_lateral.{jn}."
+            kf = ke = ps[pre + "k"]
+        else:
+            pre = f"body.{b}.joint.{jn}."
+            kf, ke = ps[pre + "k_flexion"], ps[pre + "k_extension"]
+        rest = q0[1] if j == 0 else q0[j + 1] - q0[j]
+        jt[j] = [kf, ke, ps[pre + "damping"], ps[pre + "stop_angle"], ps[pre + "k_stop"], rest]
+    return jt
+
+
+def _belt_row(
+    k: int,
+    p: float,
+    r: float,
+    a: tuple[float, float],
+    b: tuple[float, float] | None,
+    stiff: float,
+    damp: float,
+    slack: float,
+    f_limit: float,
+    c_limit: float,
+    pt: tuple[float, float, float, float, float] | None,
+    q0: np.ndarray,
+    ll: np.ndarray,
+    enabled: bool,
+) -> list[float]:
+    pt_max, pt_speed, pt_force, pt_t0, pt_t1 = (
+        pt if pt is not None else (0.0, 0.0, 1.0, _NEVER, _NEVER)
+    )
+    pos = _point(q0, ll, k, p, r)
+    length = float(np.hypot(*(np.asarray(a) - pos)))
+    if b is not None:
+        length += float(np.hypot(*(np.asarray(b) - pos)))
+    bb = b if b is not None else (0.0, 0.0)
+    return [
+        float(k),
+        p,
+        r,
+        a[0],
+        a[1],
+        bb[0],
+        bb[1],
+        1.0 if b is not None else 0.0,
+        stiff,
+        damp,
+        slack,
+        f_limit,
+        c_limit,
+        pt_max,
+        pt_speed,
+        pt_force,
+        pt_t0,
+        pt_t1,
+        length,
+        1.0 if enabled else 0.0,
+    ]
+
+
+def _sagittal(ps: ParameterSet, occ: Occupant, rs: Restraints) -> Model:
+    b = occ.body.value
+    pre = f"body.{b}."
+    ll, mb, ch = _body_arrays(ps, b, lateral=False)
+    lean = math.radians(occ.posture_lumbar_flexion_deg - ps["posture.neutral_lumbar_flexion"])
+    track = occ.seat_track_mm / 1000.0
+
+    def posture(lean_rad: float) -> np.ndarray:
+        a1 = -math.radians(ps["posture.torso_recline"]) + lean_rad
+        a2 = a1 + math.radians(ps["posture.thorax_relative"])
+        a3 = math.radians(ps["posture.neck_angle"]) + 0.5 * lean_rad
+        a4 = math.radians(ps["posture.head_angle"])
+        return np.array([0.0, a1, a2, a3, a4, 0.0])
+
+    q0 = posture(lean)
+    qn = posture(0.0)
+    jt = _joint_table(ps, b, False, q0)
+    mass = float(mb[:, 3].sum())
+    se = np.array([ps["seat.friction"], mass * ps["seat.gravity"], ps["seat.slip_speed"], 0.0])
+
+    head = (4, ps[pre + "cg.head_up"], ps[pre + "cg.head_forward"])
+    h_s, r_s = ps[pre + "sternum_height"], ps[pre + "sternum_offset"]
+    head_r = ps[pre + "head_radius"]
+    kbot = ps["seat.bottoming_stiffness"]
+    ramp = ps["frontal.contact_damping_ramp"]
+
+    # steering wheel and airbag (vehicle fixed: shift by -track)
+    hub = np.array([ps["frontal.wheel.hub_x"] - track, ps["frontal.wheel.hub_z"]])
+    ang = math.radians(ps["frontal.wheel.angle"])
+    t_dir = np.array([-math.sin(ang), math.cos(ang)])
+    n_dir = np.array([-math.cos(ang), -math.sin(ang)])
+    wa, wb = _seg(hub, t_dir, ps["frontal.wheel.radius"])
+    ba, bb = _seg(hub, t_dir, ps["frontal.airbag.half_height"])
+    bag_motion = (float(n_dir[0]), float(n_dir[1]))
+    contacts: list[ContactSpec] = [
+        ContactSpec(
+            "airbag_head",
+            *head,
+            head_r,
+            ba,
+            bb,
+            bag_motion,
+            channel=2,
+            law=1,
+            stiff=ps["frontal.airbag.stiffness"],
+            stiff3=ps["frontal.airbag.squeeze_start"],
+            damp=ps["frontal.airbag.damping"],
+            fcap=ps["frontal.airbag.head_force"],
+            ramp=ps["frontal.airbag.ramp"],
+            enabled=rs.airbag,
+        ),
+        ContactSpec(
+            "airbag_chest",
+            6,
+            h_s,
+            r_s,
+            0.02,
+            ba,
+            bb,
+            bag_motion,
+            channel=2,
+            law=1,
+            stiff=ps["frontal.airbag.stiffness"],
+            stiff3=ps["frontal.airbag.squeeze_start"],
+            damp=ps["frontal.airbag.damping"],
+            fcap=ps["frontal.airbag.chest_force"],
+            ramp=ps["frontal.airbag.ramp"],
+            enabled=rs.airbag,
+        ),
+        ContactSpec(
+            "wheel_chest",
+            5,
+            h_s,
+            r_s,
+            0.02,
+            wa,
+            wb,
+            stiff=ps["frontal.wheel.chest_stiffness"],
+            damp=ps["frontal.wheel.damping"],
+            fcap=ps["frontal.wheel.collapse_force"],
+            give=ps["frontal.wheel.stroke"],
+            k_bottom=kbot,
+            ramp=ramp,
+        ),
+        ContactSpec(
+            "wheel_head",
+            *head,
+            head_r,
+            wa,
+            wb,
+            stiff=ps["frontal.wheel.head_stiffness"],
+            damp=ps["frontal.wheel.damping"],
+            fcap=ps["frontal.wheel.collapse_force"],
+            give=ps["frontal.wheel.stroke"],
+            k_bottom=kbot,
+            ramp=ramp,
+        ),
+        ContactSpec(
+            "windshield_head",
+            *head,
+            head_r,
+            (ps["frontal.windshield.x0"] - track, ps["frontal.windshield.z0"]),
+            (ps["frontal.windshield.x1"] - track, ps["frontal.windshield.z1"]),
+            stiff=ps["frontal.windshield.stiffness"],
+            damp=ps["frontal.wheel.damping"],
+            fcap=ps["frontal.windshield.cap"],
+            give=ps["frontal.windshield.give"],
+            k_bottom=kbot,
+            ramp=ramp,
+        ),
+        ContactSpec(
+            "dash_head",
+            *head,
+            head_r,
+            (ps["frontal.dash.x0"] - track, ps["frontal.dash.z0"]),
+            (ps["frontal.dash.x1"] - track, ps["frontal.dash.z1"]),
+            stiff=ps["frontal.dash.stiffness"],
+            damp=ps["frontal.wheel.damping"],
+            fcap=ps["frontal.dash.cap"],
+            give=ps["frontal.dash.give"],
+            k_bottom=kbot,
+            ramp=ramp,
+        ),
+        ContactSpec(
+            "dash_chest",
+            5,
+            h_s,
+            r_s,
+            0.02,
+            (ps["frontal.dash.x0"] - track, ps["frontal.dash.z0"]),
+            (ps["frontal.dash.x1"] - track, ps["frontal.dash.z1"]),
+            stiff=ps["frontal.dash.stiffness"],
+            damp=ps["frontal.wheel.damping"],
+            fcap=ps["frontal.dash.cap"],
+            give=ps["frontal.dash.give"],
+            k_bottom=kbot,
+            ramp=ramp,
+        ),
+    ]
+    # knee bolster: the knee moves with the pelvis; the bolster is placed for the
+    # 50M at mid track with the stated gap, so other bodies get their own gap.
+    knee = (0, ps[pre + "thigh_length"], ps[pre + "knee_height"])
+    knee_r = ps[pre + "knee_radius"]
+    x_bolster = (
+        ps["body.male_50th.thigh_length"]
+        + ps["body.male_50th.knee_radius"]
+        + ps["frontal.knee.gap"]
+        - track
+    )
+    kz = ps["body.male_50th.knee_height"]
+    contacts.append(
+        ContactSpec(
+            "knee_bolster",
+            *knee,
+            knee_r,
+            (x_bolster, kz - 0.25),
+            (x_bolster, kz + 0.25),
+            stiff=ps["frontal.knee.stiffness"],
+            damp=ps["frontal.knee.damping"],
+            fcap=ps["frontal.knee.cap"],
+            give=ps["frontal.knee.give"],
+            k_bottom=kbot,
+            ramp=ramp,
+        )
+    )
+    # seat back and head restraint (seat fixed): touching in the neutral posture
+    sb = -math.radians(ps["seat.back_angle"])
+    n_sb = _w(sb)
+    u_sb = _u(sb)
+    back = ps[pre + "back_offset"]
+    sb_k, sb_c, sb_g = ps["seat.back_stiffness"], ps["seat.back_damping"], ps["seat.back_give"]
+    for name, k, p, r, rad in (
+        ("seat_back_pelvis", 0, 0.0, 0.08, 0.12),
+        ("seat_back_abdomen", 1, ps[pre + "cg.abdomen"], 0.0, back),
+        ("seat_back_thorax", 2, ps[pre + "cg.thorax"], 0.0, back),
+    ):
+        centre = _point(qn, ll, k, p, r) - (rad + _CLEAR) * n_sb
+        a, bpt = _seg(centre, u_sb, 0.15)
+        contacts.append(
+            ContactSpec(
+                name,
+                k,
+                p,
+                r,
+                rad,
+                a,
+                bpt,
+                stiff=sb_k,
+                damp=sb_c,
+                give=sb_g,
+                k_bottom=kbot,
+                ramp=ramp,
+            )
+        )
+    head_pos = _point(qn, ll, *head)
+    centre = head_pos - (head_r + ps["seat.head_restraint_backset"] + _CLEAR) * n_sb
+    a, bpt = _seg(centre, u_sb, 0.12)
+    contacts.append(
+        ContactSpec(
+            "head_restraint",
+            *head,
+            head_r,
+            a,
+            bpt,
+            stiff=ps["seat.head_restraint_stiffness"],
+            damp=ps["seat.head_restraint_damping"],
+            give=ps["seat.head_restraint_give"],
+            k_bottom=kbot,
+            ramp=ramp,
+        )
+    )
+
+    # belts
+    pt = None
+    if rs.pretensioner_fire_s is not None:
+        t0 = rs.pretensioner_fire_s
+        pt = (
+            ps["frontal.belt.pretensioner_stroke"],
+            ps["frontal.belt.pretensioner_speed"],
+            ps["frontal.belt.pretensioner_force"],
+            t0,
+            t0 + ps["frontal.belt.pretensioner_duration"],
+        )
+    dring = (ps["frontal.belt.dring_x"] - track, ps["frontal.belt.dring_z"])
+    buckle = (ps["frontal.belt.buckle_x"], ps["frontal.belt.buckle_z"])
+    lap_a = (ps["frontal.belt.lap_anchor_x"], ps["frontal.belt.lap_anchor_z"])
+    c_ll = ps["frontal.belt.limiter_viscosity"]
+    belts = [
+        _belt_row(
+            6,
+            h_s,
+            r_s + 0.01,
+            dring,
+            buckle,
+            ps["frontal.belt.shoulder_stiffness"],
+            ps["frontal.belt.shoulder_damping"],
+            ps["frontal.belt.shoulder_slack"],
+            ps["frontal.belt.load_limit"],
+            c_ll,
+            pt,
+            q0,
+            ll,
+            rs.belted,
+        ),
+        _belt_row(
+            0,
+            0.08,
+            0.03,
+            lap_a,
+            None,
+            ps["frontal.belt.lap_stiffness"],
+            ps["frontal.belt.lap_damping"],
+            ps["frontal.belt.lap_slack"],
+            ps["frontal.belt.load_limit_lap"],
+            c_ll,
+            None,
+            q0,
+            ll,
+            rs.belted,
+        ),
+    ]
+    t_start = rs.airbag_fire_s + ps["frontal.airbag.delay"]
+    t_full = t_start + ps["frontal.airbag.fill_time"]
+    bag = np.array(
+        [
+            t_start if rs.airbag else _NEVER,
+            t_full if rs.airbag else _NEVER + 1.0,
+            ps["frontal.airbag.depth"] if rs.airbag else 0.0,
+            t_full + ps["frontal.airbag.vent_start"],
+            ps["frontal.airbag.vent_duration"],
+            ps["frontal.airbag.vent_fraction"],
+            ps["frontal.airbag.deployment_damping"] / ps["frontal.airbag.damping"],
+            ps["frontal.airbag.deployment_stiffness"],
+        ]
+    )
+    return _finish(
+        "sagittal",
+        ll,
+        mb,
+        jt,
+        ch,
+        se,
+        contacts,
+        belts,
+        ("shoulder", "lap"),
+        bag,
+        q0,
+        {
+            "airbag_fire_s": rs.airbag_fire_s if rs.airbag else math.nan,
+            "t_full_s": t_full if rs.airbag else math.nan,
+            "airbag_depth_m": ps["frontal.airbag.depth"],
+            "pretensioner_fire_s": (
+                rs.pretensioner_fire_s if rs.pretensioner_fire_s is not None else math.nan
+            ),
+        },
+    )
+
+
+def _coronal(ps: ParameterSet, occ: Occupant, rs: Restraints, far: bool) -> Model:
+    b = occ.body.value
+    pre = f"body.{b}."
+    ll, mb, ch = _body_arrays(ps, b, lateral=True)
+    # forward lean shortens the chain as seen in the coronal plane
+    lean = math.radians(occ.posture_lumbar_flexion_deg - ps["posture.neutral_lumbar_flexion"])
+    tilt = math.radians(ps["posture.torso_recline"]) - lean
+    ll[1:4] *= math.cos(tilt) / math.cos(math.radians(ps["posture.torso_recline"]))
+    q0 = np.zeros(K.NQ)
+    jt = _joint_table(ps, b, True, q0)
+    mass = float(mb[:, 3].sum())
+    slip = ps["side.slip_damping"] * (ps["side.belt_slip_factor"] if rs.belted else 1.0)
+    se = np.array([ps["seat.friction"], mass * ps["seat.gravity"], ps["seat.slip_speed"], slip])
+    kbot = ps["seat.bottoming_stiffness"]
+    damp = ps["side.damping"]
+    ramp = ps["frontal.contact_damping_ramp"]
+    head = (4, ps[pre + "cg.head_up"], 0.0)
+    h_s, r_rib = ps[pre + "sternum_height"], ps[pre + "chest_half_width"]
+    hip_r = ps[pre + "hip_half_width"]
+    sh_r = ps[pre + "shoulder_half_width"]
+    abd = (1, 0.6 * ll[1], 0.0)
+    shoulder = (2, 0.9 * ll[2], 0.0)
+    head_r = ps[pre + "head_half_width"]
+    contacts: list[ContactSpec] = []
+    belts: list[list[float]] = []
+    belt_names: tuple[str, ...] = ()
+    if not far:
+        dx, zl, zh = ps["side.door_x"], ps["side.door_z_low"], ps["side.door_z_high"]
+        wx, wz = ps["side.window_x"], ps["side.window_z_high"]
+        up = ps["side.upper_intrusion_ratio"]
+        door = ((dx, zl), (dx, zh))
+        window = ((wx, zh), (ps["side.window_top_x"], wz))  # tumblehome
+        contacts += [
+            ContactSpec(
+                "door_pelvis",
+                0,
+                0.0,
+                0.0,
+                hip_r,
+                *door,
+                (-1.0, 0.0),
+                channel=1,
+                stiff=ps["side.pelvis_stiffness"],
+                damp=damp,
+                fcap=ps["side.pelvis_cap"],
+                give=ps["side.pelvis_give"],
+                k_bottom=kbot,
+                ramp=ramp,
+            ),
+            ContactSpec(
+                "door_abdomen",
+                *abd,
+                0.85 * hip_r,
+                *door,
+                (-1.0, 0.0),
+                channel=1,
+                stiff=ps["side.abdomen_stiffness"],
+                damp=damp,
+                fcap=ps["side.abdomen_cap"],
+                give=ps["side.abdomen_give"],
+                k_bottom=kbot,
+                ramp=ramp,
+            ),
+            ContactSpec(
+                "door_rib",
+                5,
+                h_s,
+                r_rib,
+                0.01,
+                *door,
+                (-1.0, 0.0),
+                channel=1,
+                stiff=ps["side.rib_stiffness"],
+                damp=damp,
+                fcap=ps["side.rib_cap"],
+                give=ps["side.rib_give"],
+                k_bottom=kbot,
+                ramp=ramp,
+            ),
+            ContactSpec(
+                "window_shoulder",
+                *shoulder,
+                sh_r,
+                *window,
+                (-up, 0.0),
+                channel=1,
+                stiff=ps["side.shoulder_stiffness"],
+                damp=damp,
+                fcap=ps["side.shoulder_cap"],
+                give=ps["side.shoulder_give"],
+                k_bottom=kbot,
+                ramp=ramp,
+            ),
+            ContactSpec(
+                "window_head",
+                *head,
+                head_r,
+                *window,
+                (-up, 0.0),
+                channel=1,
+                stiff=ps["side.head_stiffness"],
+                damp=damp,
+                give=ps["side.head_give"],
+                k_bottom=kbot,
+                ramp=ramp,
+            ),
+        ]
+    else:
+        cx, cz = ps["side.far.console_x"], ps["side.far.console_z_high"]
+        sx, fx = ps["side.far.seat_x"], ps["side.far.door_x"]
+        kf, capf, gf = ps["side.far.stiffness"], ps["side.far.cap"], ps["side.far.give"]
+        console = ((cx, -0.15), (cx, cz))
+        seat = ((sx, 0.15), (sx, 0.75))
+        fdoor = ((fx, 0.2), (fx, ps["side.window_z_high"]))
+        contacts += [
+            ContactSpec(
+                "console_pelvis",
+                0,
+                0.0,
+                0.0,
+                hip_r,
+                *console,
+                stiff=kf,
+                damp=damp,
+                fcap=capf,
+                give=gf,
+                k_bottom=kbot,
+                ramp=ramp,
+            ),
+            ContactSpec(
+                "console_abdomen",
+                *abd,
+                0.85 * hip_r,
+                *console,
+                stiff=kf,
+                damp=damp,
+                fcap=capf,
+                give=gf,
+                k_bottom=kbot,
+                ramp=ramp,
+            ),
+            ContactSpec(
+                "seat_rib",
+                5,
+                h_s,
+                r_rib,
+                0.01,
+                *seat,
+                stiff=kf,
+                damp=damp,
+                fcap=capf,
+                give=gf,
+                k_bottom=kbot,
+                ramp=ramp,
+            ),
+            ContactSpec(
+                "seat_shoulder",
+                *shoulder,
+                sh_r,
+                *seat,
+                stiff=kf,
+                damp=damp,
+                fcap=capf,
+                give=gf,
+                k_bottom=kbot,
+                ramp=ramp,
+            ),
+            ContactSpec(
+                "far_door_shoulder",
+                *shoulder,
+                sh_r,
+                *fdoor,
+                (-1.0, 0.0),
+                channel=1,
+                stiff=ps["side.shoulder_stiffness"],
+                damp=damp,
+                fcap=ps["side.shoulder_cap"],
+                give=ps["side.shoulder_give"],
+                k_bottom=kbot,
+                ramp=ramp,
+            ),
+            ContactSpec(
+                "far_door_head",
+                *head,
+                head_r,
+                *fdoor,
+                (-1.0, 0.0),
+                channel=1,
+                stiff=ps["side.head_stiffness"],
+                damp=damp,
+                give=ps["side.head_give"],
+                k_bottom=kbot,
+                ramp=ramp,
+            ),
+        ]
+        belts.append(
+            _belt_row(
+                2,
+                0.9 * ll[2],
+                0.0,
+                (ps["side.far.dring_x"], ps["side.far.dring_z"]),
+                None,
+                ps["side.far.shoulder_belt_stiffness"],
+                ps["frontal.belt.shoulder_damping"],
+                ps["frontal.belt.shoulder_slack"],
+                ps["frontal.belt.load_limit"],
+                ps["frontal.belt.limiter_viscosity"],
+                None,
+                q0,
+                ll,
+                rs.belted,
+            )
+        )
+        belt_names = ("shoulder",)
+    bag = np.array([_NEVER, _NEVER + 1.0, 0.0, _NEVER, 1.0, 1.0, 0.0, 0.0])
+    return _finish("coronal", ll, mb, jt, ch, se, contacts, belts, belt_names, bag, q0, {})
+
+
+def _finish(
+    plane: str,
+    ll: FloatArray,
+    mb: FloatArray,
+    jt: FloatArray,
+    ch: FloatArray,
+    se: FloatArray,
+    contacts: list[ContactSpec],
+    belts: list[list[float]],
+    belt_names: tuple[str, ...],
+    bag: FloatArray,
+    q0: np.ndarray,
+    info: dict[str, float],
+) -> Model:
+    rows = []
+    for c in contacts:
+        pos = _point(q0, ll, c.k_body, c.p, c.r)
+        ex, ez = c.b[0] - c.a[0], c.b[1] - c.a[1]
+        side = 1.0 if (-ez * (pos[0] - c.a[0]) + ex * (pos[1] - c.a[1])) >= 0.0 else -1.0
+        length = math.hypot(ex, ez)
+        ux, uz = ex / length, ez / length
+        rows.append(c.row(side) + [ux, uz, length, -uz * side, ux * side])
+    ct = np.array(rows, dtype=np.float64).reshape(-1, K.NCF)
+    bt = np.array(belts, dtype=np.float64).reshape(-1, K.NBF)
+    y0 = np.zeros(2 * K.NQ + 2 * bt.shape[0])
+    y0[: K.NQ] = q0
+    return Model(
+        plane,
+        np.ascontiguousarray(ll),
+        np.ascontiguousarray(mb),
+        np.ascontiguousarray(jt),
+        ch,
+        se,
+        np.ascontiguousarray(ct),
+        np.ascontiguousarray(bt),
+        bag,
+        y0,
+        tuple(c.name for c in contacts),
+        belt_names,
+        info,
+    )
+
+
+def build_model(
+    mode: ImpactMode, occupant: Occupant, params: ParameterSet, restraints: Restraints
+) -> Model:
+    """Assemble the kernel arrays of one case.
+
+    Parameters
+    ----------
+    mode : ImpactMode
+        FRONTAL and REAR use the sagittal model, NEAR_SIDE and FAR_SIDE the
+        coronal one.
+    occupant : Occupant
+        Body, posture and seat track are used here; belt and airbag states
+        come through ``restraints``.
+    params : ParameterSet
+    restraints : Restraints
+        Resolved restraint states and firing times.
+
+    Returns
+    -------
+    Model
+    """
+    if occupant.body not in (Body.MALE_50TH, Body.FEMALE_5TH):
+        raise ValueError(f"unsupported body {occupant.body!r}")
+    if mode in (ImpactMode.FRONTAL, ImpactMode.REAR):
+        return _sagittal(params, occupant, restraints)
+    return _coronal(params, occupant, restraints, far=mode is ImpactMode.FAR_SIDE)

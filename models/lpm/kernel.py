@@ -1,0 +1,971 @@
+"""Numba kernel of the 2-D occupant lumped parameter models (LPMs).
+
+One planar multibody model serves all four impact modes; the mode only changes
+the plane (sagittal for frontal/rear, coronal for the side modes), the
+contacts, the belts and the parameter values (assembled in
+:mod:`models.lpm.assemble`).
+
+Generalised coordinates ``q`` (shape (6,)), in the vehicle frame of the model
+plane (x toward the impact for the side modes, x forward for the sagittal
+modes; z up; origin at the initial H-point):
+
+====  ==========================================================  =====
+idx   meaning                                                     unit
+====  ==========================================================  =====
+0     pelvis (H-point) displacement along x, sliding on the seat  m
+1     absolute angle of the abdomen/lumbar link from vertical     rad
+2     absolute angle of the thorax link                           rad
+3     absolute angle of the neck link                             rad
+4     absolute angle of the head                                  rad
+5     chest (sternum or near-side rib) deflection, + compression  m
+====  ==========================================================  =====
+
+Angles are positive when the link tilts toward +x. The state vector is
+``y = [q, qdot, belt states]`` with two belt states per belt (webbing paid out
+by the load limiter, webbing reeled in by the pretensioner), shape (12 + 2 nb,).
+
+The vehicle frame is not inertial: every mass carries ``-m a_veh`` along x,
+with ``a_veh`` the vehicle acceleration resolved on the model axis. Gravity
+is left out of the 200 ms event (seat friction uses the static weight as the
+normal force), so that the initial posture is an exact equilibrium and a zero
+pulse gives an exactly zero response.
+
+Body point convention: a point is ``(k, p, r)``: on body ``k`` (0 pelvis,
+1 abdomen, 2 thorax, 3 neck, 4 head, 5 sternum/rib), ``p`` metres along the
+link axis ``u(a) = (sin a, cos a)`` from the link's lower joint and ``r``
+metres along ``w(a) = (cos a, -sin a)`` (toward +x when upright). The pelvis
+does not rotate: its points are fixed offsets ``(p, r)`` = (dx, dz). For the
+sternum (k = 5) the point is ``p`` along the thorax link and ``r - d`` along
+``w``, so that the chest deflection ``d`` moves it toward the spine; a k = 6
+point follows only the share ``ch[5]`` of ``d`` (the shoulder-belt path and the
+airbag's chest contact, which also bear on the shoulders and ribs).
+
+Integrators: :func:`integrate_se` (semi-implicit Euler, production, one
+right-hand side per step) and :func:`integrate_rk4`; both compiled with
+``nogil`` so that cases can run in parallel threads.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+__all__ = [
+    "BAG_FIELDS",
+    "BELT_FIELDS",
+    "CONTACT_FIELDS",
+    "DIAG_FIXED",
+    "NQ",
+    "integrate_rk4",
+    "integrate_se",
+    "kin",
+    "rhs",
+    "rhs_into",
+]
+
+NQ = 6
+G0 = 9.80665
+
+# --- column layouts of the packed parameter arrays -------------------------
+# Mass table MB (nm, 5): k, p, r, mass (kg), rotational inertia (kg m^2, about CG)
+# Joint table JT (4, 6): k_flex (N m/rad), k_ext (N m/rad), c (N m s/rad),
+#   stop angle (rad), stop stiffness (N m/rad), rest relative angle (rad)
+# Link lengths LL (5,): LL[j] length of link j (m), LL[0] unused
+# Chest CH (6,): k (N/m), k3 (N/m^3), c (N s/m), bottoming deflection (m),
+#   bottoming stiffness (N/m), share of the deflection followed by k = 6 points (-)
+# Seat SE (4,): friction coefficient, normal force (N), regularisation speed (m/s),
+#   slip damping (N s/m)
+CONTACT_FIELDS = (
+    "k_body",
+    "p",
+    "r",
+    "radius",
+    "ax",
+    "az",
+    "bx",
+    "bz",
+    "mx",
+    "mz",
+    "channel",
+    "law",
+    "stiff",
+    "stiff3",
+    "damp",
+    "fcap",
+    "give",
+    "k_bottom",
+    "ramp",
+    "enabled",
+    "side",
+    "ux",
+    "uz",
+    "length",
+    "nx",
+    "nz",
+)
+C_KB, C_P, C_R, C_RAD, C_AX, C_AZ, C_BX, C_BZ, C_MX, C_MZ, C_CH, C_LAW = range(12)
+C_K, C_K3, C_C, C_FCAP, C_GIVE, C_KBOT, C_RAMP, C_EN, C_SIDE = range(12, 21)
+C_UX, C_UZ, C_LEN, C_NX, C_NZ = range(21, 26)  # derived: unit direction, length, normal
+NCF = len(CONTACT_FIELDS)
+
+BELT_FIELDS = (
+    "k_body",
+    "p",
+    "r",
+    "ax",
+    "az",
+    "bx",
+    "bz",
+    "has_b",
+    "stiff",
+    "damp",
+    "slack",
+    "f_limit",
+    "c_limit",
+    "pt_max",
+    "pt_speed",
+    "pt_force",
+    "pt_t0",
+    "pt_t1",
+    "length0",
+    "enabled",
+)
+B_KB, B_P, B_R, B_AX, B_AZ, B_BX, B_BZ, B_HASB, B_K, B_C, B_SLACK = range(11)
+B_FLL, B_CLL, B_PTMAX, B_PTV, B_PTF, B_PTT0, B_PTT1, B_L0, B_EN = range(11, 20)
+NBF = len(BELT_FIELDS)
+
+# Airbag timing BAG (8,): inflation start (s), full deployment (s), depth (m),
+#   vent start (s), vent duration (s), vent residual fraction, deployment
+#   (punch-out) damping as a fraction of the bag damper, deployment stiffness (N/m)
+BAG_FIELDS = (
+    "t_start",
+    "t_full",
+    "depth",
+    "t_vent",
+    "vent_duration",
+    "vent_fraction",
+    "deploy_damping_ratio",
+    "deploy_stiffness",
+)
+
+# Diagnostics row layout (fixed part); then contact forces (nc), belt forces (nb),
+# contact penetrations (nc)
+D_HEAD_AX, D_HEAD_AZ, D_CHEST_AX, D_CHEST_AZ, D_PELV_AX = range(5)
+D_NECK_FX, D_NECK_FZ, D_NECK_MY, D_P_PULSE, D_P_ACTIVE, D_KE, D_V_INT = range(5, 12)
+DIAG_FIXED = 12
+
+
+@njit(cache=True, error_model="numpy")
+def kin(
+    q: np.ndarray,
+    qd: np.ndarray,
+    ll: np.ndarray,
+    k: int,
+    p: float,
+    r: float,
+    jx: np.ndarray,
+    jz: np.ndarray,
+    beta: float = 1.0,
+) -> tuple[float, float, float, float]:
+    """Kinematics of a body point (computes the link sines and cosines itself).
+
+    See :func:`kin_sc` for the parameters and results.
+    """
+    sn = np.zeros(NQ)
+    cs = np.zeros(NQ)
+    for j in range(1, 5):
+        sn[j] = math.sin(q[j])
+        cs[j] = math.cos(q[j])
+    return kin_sc(q, qd, ll, sn, cs, k, p, r, jx, jz, beta)
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def kin_sc(
+    q: np.ndarray,
+    qd: np.ndarray,
+    ll: np.ndarray,
+    sn: np.ndarray,
+    cs: np.ndarray,
+    k: int,
+    p: float,
+    r: float,
+    jx: np.ndarray,
+    jz: np.ndarray,
+    beta: float,
+) -> tuple[float, float, float, float]:
+    """Kinematics of a body point.
+
+    Parameters
+    ----------
+    q, qd : ndarray, shape (6,)
+        Coordinates and velocities.
+    ll : ndarray, shape (5,)
+        Link lengths, m.
+    sn, cs : ndarray, shape (6,)
+        sin and cos of the link angles q[1:5] (entries 1..4).
+    k : int
+        Body index (0 pelvis ... 4 head, 5 sternum, 6 belt path on the chest:
+        a point that follows the sternum by the fraction ``beta``).
+    p, r : float
+        Point coordinates on the body, m.
+    jx, jz : ndarray, shape (6,)
+        Output: Jacobian rows of the point position (x and z).
+
+    Returns
+    -------
+    (px, pz, ddx, ddz) : tuple of float
+        Position (m) and the velocity-product acceleration J-dot q-dot (m/s^2).
+    """
+    for i in range(NQ):
+        jx[i] = 0.0
+        jz[i] = 0.0
+    jx[0] = 1.0
+    if k == 0:
+        return q[0] + p, r, 0.0, 0.0
+    top = 2 if k >= 5 else k
+    bd = 1.0 if k == 5 else beta
+    px = q[0]
+    pz = 0.0
+    ddx = 0.0
+    ddz = 0.0
+    for j in range(1, top):
+        s = sn[j]
+        c = cs[j]
+        lj = ll[j]
+        px += lj * s
+        pz += lj * c
+        jx[j] = lj * c
+        jz[j] = -lj * s
+        w2 = qd[j] * qd[j]
+        ddx -= lj * s * w2
+        ddz -= lj * c * w2
+    s = sn[top]
+    c = cs[top]
+    rr = r
+    if k >= 5:
+        rr = r - bd * q[5]
+    # p u + rr w
+    px += p * s + rr * c
+    pz += p * c - rr * s
+    # d/da (p u + rr w) = p w - rr u
+    jx[top] = p * c - rr * s
+    jz[top] = -p * s - rr * c
+    w2 = qd[top] * qd[top]
+    # -(p u + rr w) a'^2
+    ddx -= (p * s + rr * c) * w2
+    ddz -= (p * c - rr * s) * w2
+    if k >= 5:
+        # d/dd = -bd w ; cross term 2 bd d' a' u
+        jx[5] = -bd * c
+        jz[5] = bd * s
+        ddx += 2.0 * bd * qd[5] * qd[top] * s
+        ddz += 2.0 * bd * qd[5] * qd[top] * c
+    return px, pz, ddx, ddz
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def pos_sc(
+    q: np.ndarray,
+    ll: np.ndarray,
+    sn: np.ndarray,
+    cs: np.ndarray,
+    k: int,
+    p: float,
+    r: float,
+    beta: float,
+) -> tuple[float, float]:
+    """Position only of a body point (cheap test before a contact is evaluated), m."""
+    if k == 0:
+        return q[0] + p, r
+    top = 2 if k >= 5 else k
+    px = q[0]
+    pz = 0.0
+    for j in range(1, top):
+        px += ll[j] * sn[j]
+        pz += ll[j] * cs[j]
+    rr = r
+    if k == 5:
+        rr = r - q[5]
+    elif k == 6:
+        rr = r - beta * q[5]
+    px += p * sn[top] + rr * cs[top]
+    pz += p * cs[top] - rr * sn[top]
+    return px, pz
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _interp(t: float, t0: float, dt: float, arr: np.ndarray) -> float:
+    """Linear interpolation of a uniformly sampled channel; 0 outside."""
+    n = arr.shape[0]
+    x = (t - t0) / dt
+    if x <= 0.0:
+        return arr[0] if x > -1e-12 else 0.0
+    i = int(math.floor(x))
+    if i >= n - 1:
+        return arr[n - 1]
+    f = x - i
+    return arr[i] * (1.0 - f) + arr[i + 1] * f
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _bag_state(t: float, bag: np.ndarray) -> tuple[float, float, float, float, float]:
+    """Airbag depth (m), depth rate (m/s), force scale (-), damper factor (-) and
+    deployment stiffness (N/m, non-zero while the bag fills)."""
+    t_start = bag[0]
+    t_full = bag[1]
+    depth = bag[2]
+    if t <= t_start or depth <= 0.0:
+        return 0.0, 0.0, 0.0, 0.0, 0.0
+    if t < t_full:
+        x = (t - t_start) / (t_full - t_start)
+        sm = x * x * (3.0 - 2.0 * x)
+        dsm = 6.0 * x * (1.0 - x) / (t_full - t_start)
+        # punch-out terms fade out as the bag reaches full deployment (no force jump)
+        return depth * sm, depth * dsm, 1.0, bag[6] * (1.0 - x) + x, bag[7] * (1.0 - x)
+    scale = 1.0
+    if t > bag[3]:
+        f = (t - bag[3]) / bag[4]
+        if f > 1.0:
+            f = 1.0
+        scale = 1.0 - (1.0 - bag[5]) * f
+    return depth, 0.0, scale, 1.0, 0.0
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _contact_force(
+    pen: float, pendot: float, ct: np.ndarray, scale: float, damp_on: float, k_dep: float
+) -> tuple[float, float]:
+    """Normal contact force (N, >= 0) and its elastic part for a penetration (m)."""
+    ramp = ct[C_RAMP]
+    fr = pen / ramp if ramp > 0.0 else 1.0
+    if fr > 1.0:
+        fr = 1.0
+    if ct[C_LAW] == 1.0:
+        # airbag: constant-force spring (plateau) and damper from full deployment
+        fe = ct[C_FCAP] * scale * fr
+        squeeze = ct[C_K3]  # for the airbag law: penetration where the pressure rise starts
+        if pen > squeeze:
+            fe += ct[C_K] * scale * (pen - squeeze)  # pressure rise as the bag is squeezed
+        fe += k_dep * pen  # membrane punch-out while the bag fills
+        fd = ct[C_C] * pendot * fr * damp_on
+    else:
+        fe = ct[C_K] * pen + ct[C_K3] * pen * pen * pen
+        if ct[C_FCAP] > 0.0 and fe > ct[C_FCAP]:
+            fe = ct[C_FCAP]
+        fd = ct[C_C] * pendot * fr
+    f = fe + fd
+    if ct[C_LAW] == 0.0 and ct[C_FCAP] > 0.0 and f > ct[C_FCAP]:
+        f = ct[C_FCAP]  # elastic-plastic: damping does not lift the crush force
+    if pen > ct[C_GIVE]:
+        fb = ct[C_KBOT] * (pen - ct[C_GIVE])
+        fe += fb
+        f += fb
+    if f < 0.0:
+        f = 0.0
+    return f, fe
+
+
+@njit(cache=True, inline="always", error_model="numpy")
+def _joint_torque(rel: float, reld: float, jt: np.ndarray) -> tuple[float, float]:
+    """Elastic + damping torque (N m) resisting a relative rotation, and its energy (J)."""
+    if rel >= 0.0:
+        k = jt[0]
+    else:
+        k = jt[1]
+    tau = k * rel
+    en = 0.5 * k * rel * rel
+    ex = abs(rel) - jt[3]
+    if ex > 0.0:
+        sg = 1.0 if rel > 0.0 else -1.0
+        tau += jt[4] * ex * sg
+        en += 0.5 * jt[4] * ex * ex
+    return tau + jt[2] * reld, en
+
+
+@njit(cache=True, error_model="numpy")
+def rhs(
+    t: float,
+    y: np.ndarray,
+    ll: np.ndarray,
+    mb: np.ndarray,
+    jt: np.ndarray,
+    ch: np.ndarray,
+    se: np.ndarray,
+    ct: np.ndarray,
+    bt: np.ndarray,
+    bag: np.ndarray,
+    t0: float,
+    dt_in: float,
+    acc: np.ndarray,
+    door_s: np.ndarray,
+    door_v: np.ndarray,
+    diag: np.ndarray,
+) -> np.ndarray:
+    """Time derivative of the state (allocating wrapper of :func:`rhs_into`).
+
+    Parameters
+    ----------
+    t : float
+        Time, s.
+    y : ndarray, shape (12 + 2 nb,)
+        State.
+    ll, mb, jt, ch, se, ct, bt, bag : ndarray
+        Packed parameters (see the module layouts).
+    t0, dt_in : float
+        Start time and step of the input channels, s.
+    acc : ndarray, shape (n,)
+        Vehicle acceleration on the model axis, m/s^2.
+    door_s, door_v : ndarray, shape (n,)
+        Prescribed surface motion channel 1 (door intrusion), m and m/s.
+    diag : ndarray, shape (DIAG_FIXED + 2 nc + nb,) or (0,)
+        Output diagnostics when non-empty.
+
+    Returns
+    -------
+    ndarray, shape like y
+    """
+    dy = np.zeros_like(y)
+    ws = np.zeros((NQ + 14, NQ))
+    rhs_into(t, y, dy, ll, mb, jt, ch, se, ct, bt, bag, t0, dt_in, acc, door_s, door_v, diag, ws)
+    return dy
+
+
+@njit(cache=True, error_model="numpy")
+def rhs_into(
+    t: float,
+    y: np.ndarray,
+    dy: np.ndarray,
+    ll: np.ndarray,
+    mb: np.ndarray,
+    jt: np.ndarray,
+    ch: np.ndarray,
+    se: np.ndarray,
+    ct: np.ndarray,
+    bt: np.ndarray,
+    bag: np.ndarray,
+    t0: float,
+    dt_in: float,
+    acc: np.ndarray,
+    door_s: np.ndarray,
+    door_v: np.ndarray,
+    diag: np.ndarray,
+    ws: np.ndarray,
+) -> int:
+    """Time derivative of the state.
+
+    Parameters
+    ----------
+    t : float
+        Time, s.
+    y : ndarray, shape (12 + 2 nb,)
+        State.
+    ll, mb, jt, ch, se, ct, bt, bag : ndarray
+        Packed parameters (see the module layouts).
+    t0, dt_in : float
+        Start time and step of the input channels, s.
+    acc : ndarray, shape (n,)
+        Vehicle acceleration on the model axis, m/s^2.
+    door_s, door_v : ndarray, shape (n,)
+        Prescribed surface motion channel 1 (door intrusion), m and m/s.
+    diag : ndarray, shape (DIAG_FIXED + 2 nc + nb,) or (0,)
+        Output diagnostics when non-empty.
+
+    Returns
+    -------
+    ndarray, shape like y
+    """
+    nb = bt.shape[0]
+    nc = ct.shape[0]
+    q = y[0:NQ]
+    qd = y[NQ : 2 * NQ]
+    for i in range(dy.shape[0]):
+        dy[i] = 0.0
+    for i in range(ws.shape[0]):
+        for j in range(NQ):
+            ws[i, j] = 0.0
+    m = ws[0:NQ]
+    f = ws[NQ]
+    jx = ws[NQ + 1]
+    jz = ws[NQ + 2]
+    z = ws[NQ + 3]
+    qdd = ws[NQ + 4]
+    lo = m  # Cholesky factor overwrites the lower part of M
+    sn = ws[NQ + 5]
+    cs = ws[NQ + 6]
+    for j in range(1, 5):
+        sn[j] = math.sin(y[j])
+        cs[j] = math.cos(y[j])
+    a_veh = _interp(t, t0, dt_in, acc)
+    s_door = _interp(t, t0, dt_in, door_s)
+    v_door = _interp(t, t0, dt_in, door_v)
+    depth, ddepth, bscale, bdamp, bkdep = _bag_state(t, bag)
+    want = diag.shape[0] > 0
+    p_pulse = 0.0
+    p_active = 0.0
+    v_int = 0.0
+
+    # --- inertia -----------------------------------------------------------
+    for i in range(mb.shape[0]):
+        k = int(mb[i, 0])
+        mass = mb[i, 3]
+        px, pz, ddx, ddz = kin_sc(q, qd, ll, sn, cs, k, mb[i, 1], mb[i, 2], jx, jz, ch[5])
+        # non-zero Jacobian columns: 0..top, plus 5 for the sternum
+        top = 2 if k >= 5 else k
+        nn = top + 2 if k >= 5 else top + 1
+        vx = 0.0
+        for ia in range(nn):
+            a = ia if ia <= top else 5
+            vx += jx[a] * qd[a]
+            f[a] -= mass * (jx[a] * (ddx + a_veh) + jz[a] * ddz)
+            for ib in range(ia, nn):
+                b = ib if ib <= top else 5
+                m[a, b] += mass * (jx[a] * jx[b] + jz[a] * jz[b])
+        p_pulse -= mass * a_veh * vx
+        if 1 <= k <= 4:
+            m[k, k] += mb[i, 4]
+        if want and (k == 0 or k == 2 or k == 4):
+            slot = k // 2  # 0 pelvis, 1 thorax, 2 head: keep J and J-dot q-dot
+            for a in range(NQ):
+                ws[NQ + 7 + 2 * slot, a] = jx[a]
+                ws[NQ + 8 + 2 * slot, a] = jz[a]
+            ws[NQ + 13, 2 * slot] = ddx
+            ws[NQ + 13, 2 * slot + 1] = ddz
+
+    for a in range(NQ):
+        for b in range(a + 1, NQ):
+            m[b, a] = m[a, b]
+
+    # --- joints ------------------------------------------------------------
+    for j in range(1, 5):
+        if j == 1:
+            rel = q[1] - jt[0, 5]
+            reld = qd[1]
+        else:
+            rel = q[j] - q[j - 1] - jt[j - 1, 5]
+            reld = qd[j] - qd[j - 1]
+        tau, en = _joint_torque(rel, reld, jt[j - 1])
+        v_int += en
+        f[j] -= tau
+        if j >= 2:
+            f[j - 1] += tau
+        if j == 4 and want:
+            diag[D_NECK_MY] = tau  # flexion (+) moment carried by the upper neck joint
+
+    # --- chest -------------------------------------------------------------
+    d = q[5]
+    fch = ch[0] * d + ch[1] * d * d * d + ch[2] * qd[5]
+    v_int += 0.5 * ch[0] * d * d + 0.25 * ch[1] * d**4
+    if d > ch[3]:
+        fch += ch[4] * (d - ch[3])
+        v_int += 0.5 * ch[4] * (d - ch[3]) ** 2
+    f[5] -= fch
+
+    # --- seat (pelvis slip) ------------------------------------------------
+    f[0] -= se[0] * se[1] * math.tanh(qd[0] / se[2]) + se[3] * qd[0]
+
+    # --- contacts ----------------------------------------------------------
+    head_fx = 0.0
+    head_fz = 0.0
+    for c in range(nc):
+        row = ct[c]
+        if row[C_EN] == 0.0:
+            if want:
+                diag[DIAG_FIXED + c] = 0.0
+                diag[DIAG_FIXED + nc + nb + c] = 0.0
+            continue
+        k = int(row[C_KB])
+        px, pz = pos_sc(q, ll, sn, cs, k, row[C_P], row[C_R], ch[5])
+        ch_id = row[C_CH]
+        sv = 0.0
+        vv = 0.0
+        scale = 1.0
+        damp_on = 1.0
+        kdep = 0.0
+        if ch_id == 1.0:
+            sv = s_door
+            vv = v_door
+        elif ch_id == 2.0:
+            sv = depth
+            vv = ddepth
+            scale = bscale
+            damp_on = bdamp
+            kdep = bkdep
+            if bscale == 0.0:
+                if want:
+                    diag[DIAG_FIXED + c] = 0.0
+                    diag[DIAG_FIXED + nc + nb + c] = 0.0
+                continue
+        ax = row[C_AX] + row[C_MX] * sv
+        az = row[C_AZ] + row[C_MZ] * sv
+        bx = row[C_BX] + row[C_MX] * sv
+        bz = row[C_BZ] + row[C_MZ] * sv
+        # one-sided surface with its outward normal toward the occupant's side
+        # (surfaces only translate, so direction, length and normal are constant)
+        s = ((px - ax) * row[C_UX] + (pz - az) * row[C_UZ]) / row[C_LEN]
+        snx = row[C_NX]
+        snz = row[C_NZ]
+        sd = (px - ax) * snx + (pz - az) * snz
+        if 0.0 <= s <= 1.0:
+            nx = snx
+            nz = snz
+            pen = row[C_RAD] - sd
+        else:
+            # beyond an end: round edge, only from the front side
+            cx = ax if s < 0.0 else bx
+            cz = az if s < 0.0 else bz
+            dx = px - cx
+            dz = pz - cz
+            dist = math.sqrt(dx * dx + dz * dz)
+            pen = -1.0
+            nx = snx
+            nz = snz
+            if sd > 0.0 and dist > 1e-12:
+                nx = dx / dist
+                nz = dz / dist
+                pen = row[C_RAD] - dist
+        fmag = 0.0
+        if pen > 0.0:
+            kin_sc(q, qd, ll, sn, cs, k, row[C_P], row[C_R], jx, jz, ch[5])
+            vpx = 0.0
+            vpz = 0.0
+            for a in range(NQ):
+                vpx += jx[a] * qd[a]
+                vpz += jz[a] * qd[a]
+            vsx = row[C_MX] * vv
+            vsz = row[C_MZ] * vv
+            pendot = -((vpx - vsx) * nx + (vpz - vsz) * nz)
+            fmag, fe = _contact_force(pen, pendot, row, scale, damp_on, kdep)
+            for a in range(NQ):
+                f[a] += fmag * (nx * jx[a] + nz * jz[a])
+            p_active += fmag * (nx * vsx + nz * vsz)
+            if k == 4:
+                head_fx += fmag * nx
+                head_fz += fmag * nz
+        if want:
+            diag[DIAG_FIXED + c] = fmag
+            diag[DIAG_FIXED + nc + nb + c] = pen if pen > 0.0 else 0.0
+
+    # --- belts -------------------------------------------------------------
+    for b in range(nb):
+        row = bt[b]
+        pay = y[2 * NQ + 2 * b]
+        pull = y[2 * NQ + 2 * b + 1]
+        if row[B_EN] == 0.0:
+            if want:
+                diag[DIAG_FIXED + nc + b] = 0.0
+            continue
+        k = int(row[B_KB])
+        px, pz, ddx, ddz = kin_sc(q, qd, ll, sn, cs, k, row[B_P], row[B_R], jx, jz, ch[5])
+        vpx = 0.0
+        vpz = 0.0
+        for a in range(NQ):
+            vpx += jx[a] * qd[a]
+            vpz += jz[a] * qd[a]
+        ux = row[B_AX] - px
+        uz = row[B_AZ] - pz
+        la = math.sqrt(ux * ux + uz * uz)
+        ux /= la
+        uz /= la
+        length = la
+        dirx = ux
+        dirz = uz
+        if row[B_HASB] != 0.0:
+            wx = row[B_BX] - px
+            wz = row[B_BZ] - pz
+            lb = math.sqrt(wx * wx + wz * wz)
+            length += lb
+            dirx += wx / lb
+            dirz += wz / lb
+        ldot = -(dirx * vpx + dirz * vpz)
+        elong = length - row[B_L0] - row[B_SLACK] + pull - pay
+        fel = 0.0
+        fb = 0.0
+        if elong > 0.0:
+            fel = row[B_K] * elong
+            fr = elong / 0.002
+            if fr > 1.0:
+                fr = 1.0
+            fb = fel + row[B_C] * ldot * fr
+            # damping cannot lift the tension above the load-limiter level
+            cap = row[B_FLL] if row[B_FLL] > fel else fel
+            if fb > cap:
+                fb = cap
+            if fb < 0.0:
+                fb = 0.0
+            v_int += 0.5 * row[B_K] * elong * elong
+            for a in range(NQ):
+                f[a] += fb * (dirx * jx[a] + dirz * jz[a])
+        # load limiter pay-out (viscoplastic) and pretensioner pull-in
+        over = fel - row[B_FLL]
+        dy[2 * NQ + 2 * b] = over / row[B_CLL] if over > 0.0 else 0.0
+        rate = 0.0
+        if row[B_PTT0] <= t <= row[B_PTT1]:
+            gf = (row[B_PTF] - fel) / (0.2 * row[B_PTF])
+            gr = (row[B_PTMAX] - pull) / 0.002
+            if gf > 1.0:
+                gf = 1.0
+            if gr > 1.0:
+                gr = 1.0
+            if gf > 0.0 and gr > 0.0:
+                rate = row[B_PTV] * gf * gr
+        dy[2 * NQ + 2 * b + 1] = rate
+        p_active += fel * rate
+        if want:
+            diag[DIAG_FIXED + nc + b] = fb
+
+    # --- solve M qdd = f (Cholesky, in place; the upper part keeps M) ------
+    if want:
+        ke = 0.0
+        for a in range(NQ):
+            for b in range(NQ):
+                ke += 0.5 * qd[a] * m[a, b] * qd[b]
+        diag[D_KE] = ke
+    for i in range(NQ):
+        for j in range(i + 1):
+            s = m[i, j]
+            for kk in range(j):
+                s -= lo[i, kk] * lo[j, kk]
+            if i == j:
+                lo[i, i] = math.sqrt(s)
+            else:
+                lo[i, j] = s / lo[j, j]
+    for i in range(NQ):
+        s = f[i]
+        for kk in range(i):
+            s -= lo[i, kk] * z[kk]
+        z[i] = s / lo[i, i]
+    for i in range(NQ - 1, -1, -1):
+        s = z[i]
+        for kk in range(i + 1, NQ):
+            s -= lo[kk, i] * qdd[kk]
+        qdd[i] = s / lo[i, i]
+
+    for i in range(NQ):
+        dy[i] = qd[i]
+        dy[NQ + i] = qdd[i]
+
+    if want:
+        diag[D_V_INT] = v_int
+        diag[D_P_PULSE] = p_pulse
+        diag[D_P_ACTIVE] = p_active
+        # head: the mass row with k == 4; chest: k == 2; pelvis: k == 0
+        for i in range(mb.shape[0]):
+            k = int(mb[i, 0])
+            if k != 4 and k != 2 and k != 0:
+                continue
+            slot = k // 2
+            axx = ws[NQ + 13, 2 * slot] + a_veh
+            azz = ws[NQ + 13, 2 * slot + 1]
+            for a in range(NQ):
+                axx += ws[NQ + 7 + 2 * slot, a] * qdd[a]
+                azz += ws[NQ + 8 + 2 * slot, a] * qdd[a]
+            if k == 4:
+                diag[D_HEAD_AX] = axx
+                diag[D_HEAD_AZ] = azz
+                # force of the neck on the head, expressed along the head axes
+                fnx = mb[i, 3] * axx - head_fx
+                fnz = mb[i, 3] * azz - head_fz
+                sa = math.sin(q[4])
+                ca = math.cos(q[4])
+                diag[D_NECK_FZ] = -(fnx * sa + fnz * ca)  # tension (+)
+                diag[D_NECK_FX] = fnx * ca - fnz * sa  # anterior (+) on the head
+            elif k == 2:
+                diag[D_CHEST_AX] = axx
+                diag[D_CHEST_AZ] = azz
+            else:
+                diag[D_PELV_AX] = axx
+    return 0
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def integrate_rk4(
+    y0: np.ndarray,
+    t_end: float,
+    dt: float,
+    ll: np.ndarray,
+    mb: np.ndarray,
+    jt: np.ndarray,
+    ch: np.ndarray,
+    se: np.ndarray,
+    ct: np.ndarray,
+    bt: np.ndarray,
+    bag: np.ndarray,
+    t0: float,
+    dt_in: float,
+    acc: np.ndarray,
+    door_s: np.ndarray,
+    door_v: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, int]:
+    """Classical fixed-step RK4 from t = 0 to t_end.
+
+    Returns
+    -------
+    ys : ndarray, shape (n, len(y0))
+        State at t = i dt.
+    diags : ndarray, shape (n, DIAG_FIXED + 2 nc + nb)
+        Diagnostics at the same times (from the first stage of each step).
+    status : int
+        0 success, -1 non-finite state (integration stopped).
+    """
+    n = int(round(t_end / dt)) + 1
+    ny = y0.shape[0]
+    nd = DIAG_FIXED + 2 * ct.shape[0] + bt.shape[0]
+    ys = np.zeros((n, ny))
+    diags = np.zeros((n, nd))
+    empty = np.zeros(0)
+    ws = np.zeros((NQ + 14, NQ))
+    k1 = np.zeros(ny)
+    k2 = np.zeros(ny)
+    k3 = np.zeros(ny)
+    k4 = np.zeros(ny)
+    yt = np.zeros(ny)
+    y = y0.copy()
+    status = 0
+    h2 = 0.5 * dt
+    h6 = dt / 6.0
+    for i in range(n):
+        t = i * dt
+        ys[i] = y
+        rhs_into(
+            t, y, k1, ll, mb, jt, ch, se, ct, bt, bag, t0, dt_in, acc, door_s, door_v, diags[i], ws
+        )
+        if i == n - 1:
+            break
+        for j in range(ny):
+            yt[j] = y[j] + h2 * k1[j]
+        rhs_into(
+            t + h2,
+            yt,
+            k2,
+            ll,
+            mb,
+            jt,
+            ch,
+            se,
+            ct,
+            bt,
+            bag,
+            t0,
+            dt_in,
+            acc,
+            door_s,
+            door_v,
+            empty,
+            ws,
+        )
+        for j in range(ny):
+            yt[j] = y[j] + h2 * k2[j]
+        rhs_into(
+            t + h2,
+            yt,
+            k3,
+            ll,
+            mb,
+            jt,
+            ch,
+            se,
+            ct,
+            bt,
+            bag,
+            t0,
+            dt_in,
+            acc,
+            door_s,
+            door_v,
+            empty,
+            ws,
+        )
+        for j in range(ny):
+            yt[j] = y[j] + dt * k3[j]
+        rhs_into(
+            t + dt,
+            yt,
+            k4,
+            ll,
+            mb,
+            jt,
+            ch,
+            se,
+            ct,
+            bt,
+            bag,
+            t0,
+            dt_in,
+            acc,
+            door_s,
+            door_v,
+            empty,
+            ws,
+        )
+        ok = True
+        for j in range(ny):
+            y[j] = y[j] + h6 * (k1[j] + 2.0 * k2[j] + 2.0 * k3[j] + k4[j])
+            if not math.isfinite(y[j]):
+                ok = False
+        if not ok:
+            status = -1
+            ys = ys[: i + 1]
+            diags = diags[: i + 1]
+            break
+    return ys, diags, status
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def integrate_se(
+    y0: np.ndarray,
+    t_end: float,
+    dt: float,
+    ll: np.ndarray,
+    mb: np.ndarray,
+    jt: np.ndarray,
+    ch: np.ndarray,
+    se: np.ndarray,
+    ct: np.ndarray,
+    bt: np.ndarray,
+    bag: np.ndarray,
+    t0: float,
+    dt_in: float,
+    acc: np.ndarray,
+    door_s: np.ndarray,
+    door_v: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, int]:
+    """Semi-implicit (symplectic) Euler, one right-hand side per step.
+
+    Velocities first (``v += dt a(t, q, v)``), then positions with the new
+    velocities; belt states by explicit Euler. Same returns as
+    :func:`integrate_rk4`.
+    """
+    n = int(round(t_end / dt)) + 1
+    ny = y0.shape[0]
+    nd = DIAG_FIXED + 2 * ct.shape[0] + bt.shape[0]
+    ys = np.zeros((n, ny))
+    diags = np.zeros((n, nd))
+    ws = np.zeros((NQ + 14, NQ))
+    k1 = np.zeros(ny)
+    y = y0.copy()
+    status = 0
+    for i in range(n):
+        t = i * dt
+        ys[i] = y
+        rhs_into(
+            t, y, k1, ll, mb, jt, ch, se, ct, bt, bag, t0, dt_in, acc, door_s, door_v, diags[i], ws
+        )
+        if i == n - 1:
+            break
+        ok = True
+        for j in range(NQ):
+            y[NQ + j] += dt * k1[NQ + j]
+            y[j] += dt * y[NQ + j]
+        for j in range(2 * NQ, ny):
+            y[j] += dt * k1[j]
+        for j in range(ny):
+            if not math.isfinite(y[j]):
+                ok = False
+        if not ok:
+            status = -1
+            ys = ys[: i + 1]
+            diags = diags[: i + 1]
+            break
+    return ys, diags, status

@@ -1,0 +1,186 @@
+"""The engine's inputs: a crash notification as frozen, plain data.
+
+These dataclasses are what `models.triage` consumes. They carry no validation
+framework (the HTTP layer validates the wire format with pydantic and converts
+into these); they hold SI-adjacent units named in every field.
+
+Axes follow SAE J211 vehicle axes: x forward, y right, z down. The principal
+direction of force (PDOF) is in degrees clockwise from straight ahead:
+0 frontal, 90 right side, 180 rear, 270 left side
+(`crash-data-and-triage.md` section 3).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from enum import StrEnum
+
+__all__ = [
+    "NEUTRAL_LUMBAR_FLEXION_DEG",
+    "AccelerationPulse",
+    "AirbagState",
+    "Body",
+    "CrashNotification",
+    "DeltaVPulse",
+    "DriveSide",
+    "Occupant",
+    "Pulse",
+    "Seat",
+    "Sex",
+    "SummaryPulse",
+]
+
+#: Neutral lumbar flexion of a seated occupant, deg. Reference paper
+#: (occupant-injury-framework-paper.txt, section 2.4): "neutral 5.8 deg".
+NEUTRAL_LUMBAR_FLEXION_DEG = 5.8
+
+
+class Seat(StrEnum):
+    """Front-row seat of the occupant."""
+
+    DRIVER = "driver"
+    FRONT_PASSENGER = "front_passenger"
+
+
+class Body(StrEnum):
+    """Anthropometric class of the occupant (Hybrid III family)."""
+
+    MALE_50TH = "male_50th"
+    FEMALE_5TH = "female_5th"
+
+
+class Sex(StrEnum):
+    """Occupant sex as reported by the vehicle or call taker."""
+
+    MALE = "male"
+    FEMALE = "female"
+
+
+class AirbagState(StrEnum):
+    """State of the frontal airbag in front of the occupant."""
+
+    DEPLOYED = "deployed"
+    NOT_DEPLOYED = "not_deployed"
+    ABSENT = "absent"
+
+
+class DriveSide(StrEnum):
+    """Side of the vehicle the driver sits on (left for left-hand drive)."""
+
+    LEFT = "left"
+    RIGHT = "right"
+
+
+@dataclass(frozen=True)
+class AccelerationPulse:
+    """Vehicle acceleration histories, SAE J211 axes.
+
+    Attributes
+    ----------
+    sample_rate_hz : float
+        Sampling rate, Hz.
+    longitudinal_g : tuple of float, shape (n,)
+        x (forward) acceleration, g. A frontal crash decelerates: negative.
+    lateral_g : tuple of float, shape (n,)
+        y (right) acceleration, g. An impact on the left side pushes the
+        vehicle to the right: positive.
+    """
+
+    sample_rate_hz: float
+    longitudinal_g: tuple[float, ...]
+    lateral_g: tuple[float, ...]
+    kind: str = field(default="acceleration", init=False)
+
+
+@dataclass(frozen=True)
+class DeltaVPulse:
+    """A 49 CFR 563 EDR record: cumulative delta-V at a fixed interval.
+
+    Attributes
+    ----------
+    interval_ms : float
+        Sampling interval, ms (10 ms in Part 563 Table I).
+    longitudinal_kmh : tuple of float, shape (n,)
+        Cumulative x delta-V, km/h (negative in a frontal crash).
+    lateral_kmh : tuple of float, shape (n,)
+        Cumulative y delta-V, km/h.
+    """
+
+    interval_ms: float
+    longitudinal_kmh: tuple[float, ...]
+    lateral_kmh: tuple[float, ...]
+    kind: str = field(default="delta_v", init=False)
+
+
+@dataclass(frozen=True)
+class SummaryPulse:
+    """Summary of the crash: resultant delta-V and its direction.
+
+    Attributes
+    ----------
+    delta_v_kmh : float
+        Magnitude of the velocity change, km/h.
+    pdof_deg : float
+        Principal direction of force, deg clockwise from straight ahead.
+    duration_ms : float or None
+        Pulse duration, ms; None lets the engine choose from delta-V.
+    """
+
+    delta_v_kmh: float
+    pdof_deg: float
+    duration_ms: float | None = None
+    kind: str = field(default="summary", init=False)
+
+
+Pulse = AccelerationPulse | DeltaVPulse | SummaryPulse
+
+
+@dataclass(frozen=True)
+class Occupant:
+    """One front-row occupant and the restraint state around them.
+
+    Attributes
+    ----------
+    seat : Seat
+    body : Body
+    belted : bool
+    frontal_airbag : AirbagState
+    age_years : float or None
+        Unknown ages are imputed by the models that need them.
+    sex : Sex or None
+    airbag_fire_time_ms : float or None
+        Time from time zero to airbag firing, ms.
+    pretensioner_fired : bool or None
+    posture_lumbar_flexion_deg : float
+        Lumbar flexion, deg; neutral 5.8, forward leaning up to 25.
+    seat_track_mm : float
+        Seat track position relative to mid track, mm, positive forward.
+    posture_sd_deg, seat_track_sd_mm : float or None
+        Sensor standard deviations; None for the service defaults.
+    """
+
+    seat: Seat
+    body: Body
+    belted: bool
+    frontal_airbag: AirbagState
+    age_years: float | None = None
+    sex: Sex | None = None
+    airbag_fire_time_ms: float | None = None
+    pretensioner_fired: bool | None = None
+    posture_lumbar_flexion_deg: float = NEUTRAL_LUMBAR_FLEXION_DEG
+    seat_track_mm: float = 0.0
+    posture_sd_deg: float | None = None
+    seat_track_sd_mm: float | None = None
+
+
+@dataclass(frozen=True)
+class CrashNotification:
+    """A whole notification: the crash and its occupants."""
+
+    event_id: str
+    vehicle_model: str
+    drive_side: DriveSide
+    pulse: Pulse
+    multiple_impacts: bool
+    rollover: bool
+    occupants: tuple[Occupant, ...]

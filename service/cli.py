@@ -1,0 +1,278 @@
+"""The `aacn-triage` command line.
+
+Commands::
+
+    aacn-triage serve [--host H] [--port P]
+    aacn-triage db upgrade [REV] | db downgrade REV | db current
+    aacn-triage keys create --role submitter|auditor|admin --name NAME
+    aacn-triage keys list
+    aacn-triage triage FILE.json
+    aacn-triage triage --batch IN.jsonl --out OUT.jsonl [--resume]
+    aacn-triage baseline fit [--data CSV] [--out JSON]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+from collections.abc import Sequence
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any
+
+from pydantic import ValidationError
+
+__all__ = ["main"]
+
+
+def _print(text: str, *, err: bool = False) -> None:
+    stream = sys.stderr if err else sys.stdout
+    stream.write(text + "\n")
+    stream.flush()
+
+
+def _settings() -> Any:
+    from service.settings import get_settings
+
+    settings = get_settings()
+    if settings.numba_cache_dir is not None:
+        os.environ.setdefault("NUMBA_CACHE_DIR", str(settings.numba_cache_dir))
+    return settings
+
+
+# ------------------------------------------------------------------- commands
+
+
+def _cmd_serve(args: argparse.Namespace) -> int:
+    import uvicorn
+
+    from service.app import create_app
+
+    settings = _settings()
+    host = args.host or settings.host
+    port = args.port or settings.port
+    uvicorn.run(
+        create_app(settings),
+        host=host,
+        port=port,
+        log_level=settings.log_level.lower(),
+        proxy_headers=True,
+    )
+    return 0
+
+
+def _cmd_db(args: argparse.Namespace) -> int:
+    from service.db import migrate
+
+    url = _settings().database_url
+    if args.db_command == "upgrade":
+        migrate.upgrade(url, args.revision)
+    elif args.db_command == "downgrade":
+        migrate.downgrade(url, args.revision)
+    _print(f"database at revision {migrate.current_revision(url) or 'base'}")
+    return 0
+
+
+def _sessions() -> Any:
+    from service.db import migrate
+    from service.db.session import make_engine, make_sessionmaker
+
+    settings = _settings()
+    if settings.auto_migrate:
+        migrate.upgrade(settings.database_url)
+    return make_sessionmaker(make_engine(settings.database_url))
+
+
+def _cmd_keys(args: argparse.Namespace) -> int:
+    from service.auth import Role, create_api_key
+    from service.db import repository
+
+    sessions = _sessions()
+    if args.keys_command == "create":
+        try:
+            row, secret = create_api_key(sessions, name=args.name, role=Role(args.role))
+        except ValueError as exc:
+            _print(f"error: {exc}", err=True)
+            return 1
+        _print(f"created key {row.name!r} (role {row.role}); it is shown once:", err=True)
+        _print(secret)
+        return 0
+    with sessions() as session:
+        for key in repository.list_api_keys(session):
+            state = "revoked" if key.revoked_at else "active"
+            _print(f"{key.name}\t{key.role}\t{key.key_prefix}...\t{state}\t{key.created_at}")
+    return 0
+
+
+def _problem_from_validation(exc: ValidationError) -> dict[str, Any]:
+    from fastapi.exceptions import RequestValidationError
+
+    from service.problems import validation_errors
+
+    errors = validation_errors(RequestValidationError(exc.errors()))
+    return {
+        "title": "Invalid notification",
+        "status": 422,
+        "errors": [e.model_dump() for e in errors],
+    }
+
+
+def _evaluate_text(text: str, models: Any) -> dict[str, Any]:
+    """One notification (JSON text) -> {"result": ...} or {"error": problem}."""
+    from service.cases_service import evaluate
+    from service.problems import DomainError
+    from service.schemas import CrashNotificationIn
+
+    try:
+        notification = CrashNotificationIn.model_validate_json(text)
+    except ValidationError as exc:
+        return {"error": _problem_from_validation(exc)}
+    try:
+        result = evaluate(notification, models, case_id=None, received_at=datetime.now(UTC))
+    except DomainError as exc:
+        return {
+            "error": {
+                "title": exc.title,
+                "status": exc.status,
+                "detail": exc.detail,
+                "errors": [e.model_dump() for e in exc.errors or []],
+            }
+        }
+    return {"result": result.model_dump(mode="json")}
+
+
+def _cmd_triage(args: argparse.Namespace) -> int:
+    from models.triage import load_engine_models
+
+    settings = _settings()
+    models = load_engine_models(threshold_override=settings.triage_threshold)
+    if args.batch is None:
+        if args.file is None:
+            _print("error: give FILE.json or --batch IN.jsonl --out OUT.jsonl", err=True)
+            return 2
+        text = Path(args.file).read_text(encoding="utf-8")
+        outcome = _evaluate_text(text, models)
+        if "error" in outcome:
+            _print(json.dumps(outcome["error"], indent=2), err=True)
+            return 1
+        _print(json.dumps(outcome["result"], indent=2))
+        return 0
+    if args.out is None:
+        _print("error: --batch needs --out OUT.jsonl", err=True)
+        return 2
+    return _run_batch(Path(args.batch), Path(args.out), models, resume=args.resume)
+
+
+def _run_batch(src: Path, out: Path, models: Any, *, resume: bool) -> int:
+    """Evaluate a JSONL file line by line into OUT (one line per input line, in order).
+
+    With `resume`, the complete lines already in OUT are kept and skipped, so an
+    interrupted run continues where it stopped; without it OUT is rewritten.
+    """
+    from tqdm import tqdm
+
+    lines = src.read_text(encoding="utf-8").splitlines()
+    done = 0
+    if resume and out.exists():
+        kept = []
+        for raw in out.read_text(encoding="utf-8").splitlines():
+            try:
+                json.loads(raw)
+            except json.JSONDecodeError:
+                break  # a torn last line from an interrupted run: redo it
+            kept.append(raw)
+        done = len(kept)
+        out.write_text("".join(k + "\n" for k in kept), encoding="utf-8")
+    elif out.exists():
+        out.unlink()
+    failures = 0
+    with (
+        out.open("a", encoding="utf-8") as sink,
+        tqdm(total=len(lines), initial=done, unit="case", file=sys.stderr, desc="triage") as bar,
+    ):
+        for number, text in enumerate(lines[done:], start=done + 1):
+            if not text.strip():
+                record: dict[str, Any] = {"line": number, "error": {"title": "Empty line"}}
+            else:
+                record = {"line": number, **_evaluate_text(text, models)}
+            failures += "error" in record
+            sink.write(json.dumps(record, separators=(",", ":")) + "\n")
+            sink.flush()
+            bar.update(1)
+    _print(f"{len(lines) - done} evaluated, {failures} refused; results in {out}", err=True)
+    return 0
+
+
+def _cmd_baseline(args: argparse.Namespace) -> int:
+    from models.baseline.fit import main as fit_main
+
+    argv: list[str] = ["--seed", str(args.seed)]
+    if args.data:
+        argv += ["--data", args.data]
+    if args.out:
+        argv += ["--out", args.out]
+    if args.fit_date:
+        argv += ["--fit-date", args.fit_date]
+    return int(fit_main(argv) or 0)
+
+
+# --------------------------------------------------------------------- parser
+
+
+def build_parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="aacn-triage", description="AACN occupant injury triage service and tools."
+    )
+    sub = parser.add_subparsers(dest="command", required=True)
+
+    serve = sub.add_parser("serve", help="run the HTTP service")
+    serve.add_argument("--host", help="bind address (default AACN_HOST or 127.0.0.1)")
+    serve.add_argument("--port", type=int, help="port (default AACN_PORT or 8000)")
+    serve.set_defaults(func=_cmd_serve)
+
+    db = sub.add_parser("db", help="database migrations")
+    db_sub = db.add_subparsers(dest="db_command", required=True)
+    up = db_sub.add_parser("upgrade", help="migrate up (default: head)")
+    up.add_argument("revision", nargs="?", default="head")
+    down = db_sub.add_parser("downgrade", help="migrate down to REV (e.g. base)")
+    down.add_argument("revision")
+    db_sub.add_parser("current", help="print the current revision")
+    db.set_defaults(func=_cmd_db)
+
+    keys = sub.add_parser("keys", help="API keys")
+    keys_sub = keys.add_subparsers(dest="keys_command", required=True)
+    create = keys_sub.add_parser("create", help="create a key and print it once")
+    create.add_argument("--role", required=True, choices=["submitter", "auditor", "admin"])
+    create.add_argument("--name", required=True, help="client name, recorded with its cases")
+    keys_sub.add_parser("list", help="list keys (names, roles, prefixes)")
+    keys.set_defaults(func=_cmd_keys)
+
+    tri = sub.add_parser("triage", help="triage notifications offline (no server, no database)")
+    tri.add_argument("file", nargs="?", help="one notification (JSON)")
+    tri.add_argument("--batch", help="JSON Lines input, one notification per line")
+    tri.add_argument("--out", help="JSON Lines output (with --batch)")
+    tri.add_argument("--resume", action="store_true", help="keep OUT's lines and continue")
+    tri.set_defaults(func=_cmd_triage)
+
+    base = sub.add_parser("baseline", help="statistical baseline")
+    base_sub = base.add_subparsers(dest="baseline_command", required=True)
+    fit_cmd = base_sub.add_parser("fit", help="refit the logistic baseline on NASS-CDS")
+    fit_cmd.add_argument("--data", help="CSV (default: the shipped NASS-CDS extract)")
+    fit_cmd.add_argument("--out", help="artifact path (default: the shipped artifact)")
+    fit_cmd.add_argument("--seed", type=int, default=0, help="seed of the cross-validation folds")
+    fit_cmd.add_argument(
+        "--fit-date", help="date to record (YYYY-MM-DD); the same date gives the same bytes"
+    )
+    base.set_defaults(func=_cmd_baseline)
+    return parser
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    return int(args.func(args))
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

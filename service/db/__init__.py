@@ -1,0 +1,1 @@
+"""Persistence: typed tables, engine/session factory, the repository, migrations."""

@@ -1,0 +1,126 @@
+"""Every query of the service. Services call these; routers never touch SQL."""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from datetime import datetime
+
+from sqlalchemy import and_, exists, or_, select, text
+from sqlalchemy.orm import Session, selectinload
+
+from service.db.tables import ApiKey, Case, CaseOccupant, IdempotencyRecord
+
+__all__ = [
+    "CaseFilters",
+    "add_api_key",
+    "add_case",
+    "find_active_key",
+    "get_api_key_by_name",
+    "get_case",
+    "get_idempotency_record",
+    "list_api_keys",
+    "list_cases",
+    "ping",
+]
+
+
+def ping(session: Session) -> None:
+    """Round trip to the database (readiness)."""
+    session.execute(text("SELECT 1"))
+
+
+# ------------------------------------------------------------------ API keys
+
+
+def add_api_key(session: Session, key: ApiKey) -> ApiKey:
+    session.add(key)
+    session.flush()
+    return key
+
+
+def find_active_key(session: Session, key_sha256: str) -> ApiKey | None:
+    return session.scalar(
+        select(ApiKey).where(ApiKey.key_sha256 == key_sha256, ApiKey.revoked_at.is_(None))
+    )
+
+
+def get_api_key_by_name(session: Session, name: str) -> ApiKey | None:
+    return session.scalar(select(ApiKey).where(ApiKey.name == name))
+
+
+def list_api_keys(session: Session) -> Sequence[ApiKey]:
+    return session.scalars(select(ApiKey).order_by(ApiKey.id)).all()
+
+
+# --------------------------------------------------------------------- cases
+
+
+def add_case(session: Session, case: Case, record: IdempotencyRecord) -> None:
+    """Stage a case, its occupants and its idempotency record (one transaction)."""
+    session.add(case)
+    session.add(record)
+    session.flush()
+
+
+def get_case(session: Session, case_id: str) -> Case | None:
+    return session.get(Case, case_id)
+
+
+def get_idempotency_record(
+    session: Session, client_name: str, event_id: str
+) -> IdempotencyRecord | None:
+    return session.scalar(
+        select(IdempotencyRecord).where(
+            IdempotencyRecord.client_name == client_name, IdempotencyRecord.event_id == event_id
+        )
+    )
+
+
+@dataclass(frozen=True)
+class CaseFilters:
+    """Filters of the case list (all optional)."""
+
+    received_from: datetime | None = None
+    received_before: datetime | None = None
+    iss15_plus: bool | None = None
+    impact_mode: str | None = None
+
+
+def list_cases(
+    session: Session,
+    filters: CaseFilters,
+    *,
+    limit: int,
+    after: tuple[datetime, str] | None = None,
+) -> Sequence[Case]:
+    """Cases newest first, keyset-paginated on (received_at, id).
+
+    Parameters
+    ----------
+    after : (received_at, case_id) or None
+        The last row of the previous page.
+    """
+    stmt = select(Case).options(selectinload(Case.occupants))
+    if filters.received_from is not None:
+        stmt = stmt.where(Case.received_at >= filters.received_from)
+    if filters.received_before is not None:
+        stmt = stmt.where(Case.received_at < filters.received_before)
+    if filters.iss15_plus is not None:
+        stmt = stmt.where(Case.iss15_plus.is_(filters.iss15_plus))
+    if filters.impact_mode is not None:
+        stmt = stmt.where(
+            exists().where(
+                and_(
+                    CaseOccupant.case_id == Case.id,
+                    CaseOccupant.impact_mode == filters.impact_mode,
+                )
+            )
+        )
+    if after is not None:
+        at, case_id = after
+        stmt = stmt.where(
+            or_(Case.received_at < at, and_(Case.received_at == at, Case.id < case_id))
+        )
+    stmt = stmt.order_by(Case.received_at.desc(), Case.id.desc()).limit(limit)
+    return session.scalars(stmt).all()

@@ -1,0 +1,130 @@
+"""Typed SQLAlchemy 2 tables of the audit store."""
+
+from __future__ import annotations
+
+from datetime import UTC, datetime
+from typing import Any
+
+from sqlalchemy import (
+    JSON,
+    Boolean,
+    DateTime,
+    Dialect,
+    Float,
+    ForeignKey,
+    Index,
+    Integer,
+    MetaData,
+    String,
+    TypeDecorator,
+    UniqueConstraint,
+)
+from sqlalchemy.orm import DeclarativeBase, Mapped, mapped_column, relationship
+
+__all__ = ["ApiKey", "Base", "Case", "CaseOccupant", "IdempotencyRecord", "UTCDateTime"]
+
+#: Constraint names that migrations can rely on (fastapi-best-practices, polar).
+NAMING_CONVENTION = {
+    "ix": "ix_%(column_0_label)s",
+    "uq": "%(table_name)s_%(column_0_N_name)s_key",
+    "ck": "%(table_name)s_%(constraint_name)s_check",
+    "fk": "%(table_name)s_%(column_0_N_name)s_fkey",
+    "pk": "%(table_name)s_pkey",
+}
+
+
+class UTCDateTime(TypeDecorator[datetime]):
+    """A timezone-aware UTC timestamp on every backend (SQLite stores naive UTC)."""
+
+    impl = DateTime(timezone=True)
+    cache_ok = True
+
+    def process_bind_param(self, value: datetime | None, dialect: Dialect) -> datetime | None:
+        if value is None:
+            return None
+        if value.tzinfo is None:
+            raise ValueError("naive datetimes are not stored; pass a timezone-aware value")
+        value = value.astimezone(UTC)
+        return value.replace(tzinfo=None) if dialect.name == "sqlite" else value
+
+    def process_result_value(self, value: datetime | None, dialect: Dialect) -> datetime | None:
+        if value is None:
+            return None
+        return value.replace(tzinfo=UTC) if value.tzinfo is None else value.astimezone(UTC)
+
+
+class Base(DeclarativeBase):
+    metadata = MetaData(naming_convention=NAMING_CONVENTION)
+    type_annotation_map = {datetime: UTCDateTime, dict[str, Any]: JSON}
+
+
+class ApiKey(Base):
+    """A client's API key; only its SHA-256 is stored."""
+
+    __tablename__ = "api_keys"
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True, autoincrement=True)
+    name: Mapped[str] = mapped_column(String(100), unique=True)
+    role: Mapped[str] = mapped_column(String(20))
+    key_prefix: Mapped[str] = mapped_column(String(16))
+    key_sha256: Mapped[str] = mapped_column(String(64), unique=True)
+    created_at: Mapped[datetime]
+    revoked_at: Mapped[datetime | None]
+
+
+class Case(Base):
+    """One triaged notification: what came in, what went out, and with which models."""
+
+    __tablename__ = "cases"
+
+    id: Mapped[str] = mapped_column(String(36), primary_key=True)
+    event_id: Mapped[str] = mapped_column(String(128))
+    client_name: Mapped[str] = mapped_column(String(100))
+    received_at: Mapped[datetime]
+    stored_at: Mapped[datetime]
+    request_sha256: Mapped[str] = mapped_column(String(64))
+    notification: Mapped[dict[str, Any]]
+    result: Mapped[dict[str, Any]]
+    models: Mapped[dict[str, Any]]
+    engine_version: Mapped[str] = mapped_column(String(32))
+    iss15_plus: Mapped[bool] = mapped_column(Boolean)
+    probability: Mapped[float] = mapped_column(Float)
+
+    occupants: Mapped[list[CaseOccupant]] = relationship(
+        back_populates="case", cascade="all, delete-orphan", order_by="CaseOccupant.position"
+    )
+
+    __table_args__ = (Index("ix_cases_received_at_id", "received_at", "id"),)
+
+
+class CaseOccupant(Base):
+    """Per-occupant facts of a case, kept as columns for audit queries and filters."""
+
+    __tablename__ = "case_occupants"
+
+    case_id: Mapped[str] = mapped_column(
+        String(36), ForeignKey("cases.id", ondelete="CASCADE"), primary_key=True
+    )
+    position: Mapped[int] = mapped_column(Integer, primary_key=True)
+    seat: Mapped[str] = mapped_column(String(32))
+    impact_mode: Mapped[str] = mapped_column(String(16), index=True)
+    method: Mapped[str] = mapped_column(String(16))
+    iss15_plus: Mapped[bool] = mapped_column(Boolean)
+    probability: Mapped[float] = mapped_column(Float)
+
+    case: Mapped[Case] = relationship(back_populates="occupants")
+
+
+class IdempotencyRecord(Base):
+    """(client, event_id) -> the case it produced and the fingerprint of the body."""
+
+    __tablename__ = "idempotency_records"
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True, autoincrement=True)
+    client_name: Mapped[str] = mapped_column(String(100))
+    event_id: Mapped[str] = mapped_column(String(128))
+    request_sha256: Mapped[str] = mapped_column(String(64))
+    case_id: Mapped[str] = mapped_column(String(36), ForeignKey("cases.id", ondelete="CASCADE"))
+    created_at: Mapped[datetime]
+
+    __table_args__ = (UniqueConstraint("client_name", "event_id"),)

@@ -1,0 +1,95 @@
+"""Prometheus metrics: HTTP requests and latencies, triage decisions, engine time.
+
+One registry per app (so test apps do not collide). HTTP metrics are labelled
+by route template, not raw path, to keep cardinality bounded; health and
+metrics endpoints are not counted.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Awaitable, Callable
+
+from prometheus_client import CollectorRegistry, Counter, Histogram
+from starlette.requests import Request
+from starlette.responses import Response
+from starlette.routing import Match
+
+__all__ = ["Metrics", "metrics_middleware"]
+
+#: Paths left out of the HTTP metrics (polar's METRICS_DENY_LIST).
+UNCOUNTED_PATHS = frozenset({"/livez", "/readyz", "/metrics"})
+#: Latency buckets, s: the request path is milliseconds; batch calls can take seconds.
+LATENCY_BUCKETS_S = (0.001, 0.0025, 0.005, 0.01, 0.025, 0.05, 0.1, 0.25, 0.5, 1.0, 2.5, 5.0, 10.0)
+
+
+class Metrics:
+    """The service's collectors, in their own registry."""
+
+    def __init__(self) -> None:
+        self.registry = CollectorRegistry(auto_describe=True)
+        self.requests = Counter(
+            "aacn_http_requests_total",
+            "HTTP requests by route template, method and status class.",
+            ["handler", "method", "status"],
+            registry=self.registry,
+        )
+        self.latency = Histogram(
+            "aacn_http_request_duration_seconds",
+            "HTTP request latency by route template and method, s.",
+            ["handler", "method"],
+            buckets=LATENCY_BUCKETS_S,
+            registry=self.registry,
+        )
+        self.decisions = Counter(
+            "aacn_triage_decisions_total",
+            "Case-level triage decisions of newly stored cases.",
+            ["decision", "method"],
+            registry=self.registry,
+        )
+        self.engine_seconds = Histogram(
+            "aacn_engine_seconds",
+            "Engine time per notification, s.",
+            buckets=LATENCY_BUCKETS_S,
+            registry=self.registry,
+        )
+        self.replays = Counter(
+            "aacn_idempotent_replays_total",
+            "POSTs answered from the idempotency record.",
+            registry=self.registry,
+        )
+
+
+def _handler_name(request: Request) -> str:
+    matched = request.scope.get("route")  # set by Starlette's router once it has routed
+    if matched is not None:
+        return str(getattr(matched, "path", "none"))
+    for route in request.app.router.routes:
+        match, _ = route.matches(request.scope)
+        if match is Match.FULL:
+            return str(getattr(route, "path", "none"))
+    return "none"
+
+
+def metrics_middleware(
+    metrics: Metrics,
+) -> Callable[[Request, Callable[[Request], Awaitable[Response]]], Awaitable[Response]]:
+    """An HTTP middleware function recording counts and latencies."""
+
+    async def middleware(
+        request: Request, call_next: Callable[[Request], Awaitable[Response]]
+    ) -> Response:
+        if request.url.path in UNCOUNTED_PATHS:
+            return await call_next(request)
+        start = time.perf_counter()
+        status = 500
+        try:
+            response = await call_next(request)
+            status = response.status_code
+            return response
+        finally:
+            handler = _handler_name(request)
+            metrics.requests.labels(handler, request.method, f"{status // 100}xx").inc()
+            metrics.latency.labels(handler, request.method).observe(time.perf_counter() - start)
+
+    return middleware

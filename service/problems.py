@@ -1,0 +1,252 @@
+"""RFC 9457 problem details: the error tree and its one JSON shape.
+
+Error tree::
+
+    DomainError                      (status from the subclass)
+     + Unauthorized                  401 no or unknown API key
+     + Forbidden                     403 the key's role may not do this
+     + NotFound                      404
+     + IdempotencyConflict           409 same event_id, different body
+     + PayloadTooLarge               413
+     + UnprocessableNotification     422 valid JSON, impossible content
+
+Every handler answers ``application/problem+json`` with ``type``, ``title``,
+``status``, ``detail`` and, for 422, ``errors``: one entry per offending field
+with its dotted path and the reason. Owned here rather than taken from a plugin
+because the plugins' field names drift (service-style.md section 4).
+"""
+
+from __future__ import annotations
+
+import logging
+from typing import Any
+
+from fastapi import FastAPI, Request
+from fastapi.exceptions import RequestValidationError
+from fastapi.responses import JSONResponse
+from pydantic import BaseModel, Field
+from starlette.exceptions import HTTPException as StarletteHTTPException
+
+__all__ = [
+    "PROBLEM_MEDIA_TYPE",
+    "DomainError",
+    "FieldError",
+    "Forbidden",
+    "IdempotencyConflict",
+    "NotFound",
+    "PayloadTooLarge",
+    "Problem",
+    "Unauthorized",
+    "UnprocessableNotification",
+    "install_problem_handlers",
+    "problem_response",
+]
+
+log = logging.getLogger(__name__)
+
+PROBLEM_MEDIA_TYPE = "application/problem+json"
+_TYPE_BASE = "https://aacn-triage.example/problems/"
+#: Tags of the pulse union; pydantic puts the tag into error paths, callers do not see it.
+_UNION_TAGS = frozenset({"acceleration", "delta_v", "summary"})
+
+
+class FieldError(BaseModel):
+    """One offending field of a request."""
+
+    field: str = Field(description="Dotted path of the field, e.g. `crash.pulse.sample_rate_hz`.")
+    reason: str = Field(description="Why the value was refused.")
+    type: str = Field(description="Machine-readable error code.")
+
+
+class Problem(BaseModel):
+    """An RFC 9457 problem details object."""
+
+    type: str = Field(description="URI identifying the problem type.")
+    title: str = Field(description="Short summary of the problem type.")
+    status: int = Field(description="HTTP status code.")
+    detail: str = Field(description="Explanation of this occurrence.")
+    instance: str | None = Field(default=None, description="The request path.")
+    errors: list[FieldError] | None = Field(
+        default=None, description="Offending fields (validation problems only)."
+    )
+
+    model_config = {
+        "json_schema_extra": {
+            "examples": [
+                {
+                    "type": _TYPE_BASE + "validation",
+                    "title": "Invalid notification",
+                    "status": 422,
+                    "detail": "1 field was refused.",
+                    "instance": "/v1/cases",
+                    "errors": [
+                        {
+                            "field": "crash.pulse.sample_rate_hz",
+                            "reason": "Input should be greater than 0",
+                            "type": "greater_than",
+                        }
+                    ],
+                }
+            ]
+        }
+    }
+
+
+class DomainError(Exception):
+    """Base of the service's expected errors; each maps to one problem type."""
+
+    status = 400
+    slug = "bad-request"
+    title = "Bad request"
+
+    def __init__(self, detail: str, *, errors: list[FieldError] | None = None) -> None:
+        super().__init__(detail)
+        self.detail = detail
+        self.errors = errors
+
+
+class Unauthorized(DomainError):
+    status, slug, title = 401, "unauthorized", "Missing or unknown API key"
+
+
+class Forbidden(DomainError):
+    status, slug, title = 403, "forbidden", "Role not allowed"
+
+
+class NotFound(DomainError):
+    status, slug, title = 404, "not-found", "Not found"
+
+
+class IdempotencyConflict(DomainError):
+    status, slug, title = 409, "idempotency-conflict", "event_id reused with a different body"
+
+
+class PayloadTooLarge(DomainError):
+    status, slug, title = 413, "payload-too-large", "Request body too large"
+
+
+class UnprocessableNotification(DomainError):
+    status, slug, title = 422, "validation", "Invalid notification"
+
+
+def problem_response(
+    status: int,
+    title: str,
+    detail: str,
+    *,
+    slug: str,
+    instance: str | None = None,
+    errors: list[FieldError] | None = None,
+    headers: dict[str, str] | None = None,
+) -> JSONResponse:
+    """Build a problem+json response."""
+    body = Problem(
+        type=_TYPE_BASE + slug,
+        title=title,
+        status=status,
+        detail=detail,
+        instance=instance,
+        errors=errors,
+    )
+    return JSONResponse(
+        body.model_dump(exclude_none=True),
+        status_code=status,
+        media_type=PROBLEM_MEDIA_TYPE,
+        headers=headers,
+    )
+
+
+def _field_path(loc: tuple[Any, ...] | list[Any]) -> str:
+    parts = list(loc)
+    if parts and parts[0] in ("body", "query", "path", "header"):
+        parts = parts[1:]
+    cleaned: list[str] = []
+    for i, part in enumerate(parts):
+        if part in _UNION_TAGS and i > 0 and parts[i - 1] == "pulse":
+            continue
+        cleaned.append(f"[{part}]" if isinstance(part, int) else str(part))
+    text = ".".join(cleaned).replace(".[", "[")
+    return text or "body"
+
+
+def validation_errors(exc: RequestValidationError) -> list[FieldError]:
+    """Turn pydantic's errors into field errors with dotted paths."""
+    out: list[FieldError] = []
+    for err in exc.errors():
+        reason = str(err.get("msg", "invalid value"))
+        if reason.startswith("Value error, "):
+            reason = reason[len("Value error, ") :]
+        out.append(
+            FieldError(field=_field_path(err.get("loc", ())), reason=reason, type=str(err["type"]))
+        )
+    return out
+
+
+def install_problem_handlers(app: FastAPI) -> None:
+    """Register the handlers that turn every error into problem+json."""
+
+    @app.exception_handler(DomainError)
+    async def _domain(request: Request, exc: DomainError) -> JSONResponse:
+        headers = {"WWW-Authenticate": "Bearer"} if exc.status == 401 else None
+        return problem_response(
+            exc.status,
+            exc.title,
+            exc.detail,
+            slug=exc.slug,
+            instance=request.url.path,
+            errors=exc.errors,
+            headers=headers,
+        )
+
+    @app.exception_handler(RequestValidationError)
+    async def _validation(request: Request, exc: RequestValidationError) -> JSONResponse:
+        errors = validation_errors(exc)
+        if any(e.type == "json_invalid" for e in errors):
+            return problem_response(
+                400,
+                "Malformed JSON",
+                "The request body is not valid JSON: " + errors[0].reason,
+                slug="malformed-json",
+                instance=request.url.path,
+                errors=errors,
+            )
+        n = len(errors)
+        return problem_response(
+            422,
+            "Invalid request",
+            f"{n} field{'s' if n != 1 else ''} {'were' if n != 1 else 'was'} refused.",
+            slug="validation",
+            instance=request.url.path,
+            errors=errors,
+        )
+
+    @app.exception_handler(StarletteHTTPException)
+    async def _http(request: Request, exc: StarletteHTTPException) -> JSONResponse:
+        return problem_response(
+            exc.status_code,
+            _reason(exc.status_code),
+            str(exc.detail),
+            slug=f"http-{exc.status_code}",
+            instance=request.url.path,
+            headers=dict(exc.headers) if exc.headers else None,
+        )
+
+    @app.exception_handler(Exception)
+    async def _unexpected(request: Request, exc: Exception) -> JSONResponse:
+        log.exception("unexpected error on %s", request.url.path)
+        return problem_response(
+            500,
+            "Internal server error",
+            "The server failed to process the request; nothing was stored for it.",
+            slug="internal",
+            instance=request.url.path,
+        )
+
+
+def _reason(status: int) -> str:
+    from http import HTTPStatus
+
+    try:
+        return HTTPStatus(status).phrase
+    except ValueError:
+        return "Error"

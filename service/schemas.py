@@ -1,0 +1,613 @@
+"""Wire models of the v1 contract (pydantic v2), with descriptions and examples.
+
+Units are in the field names. Axes are SAE J211 vehicle axes (x forward,
+y right); PDOF is in degrees clockwise from straight ahead (0 frontal,
+90 right side, 180 rear, 270 left side).
+"""
+
+from __future__ import annotations
+
+import math
+from datetime import datetime
+from typing import Annotated, Any, Literal
+
+from pydantic import (
+    AwareDatetime,
+    BaseModel,
+    ConfigDict,
+    Field,
+    StringConstraints,
+    model_validator,
+)
+
+from models import notification as engine
+
+__all__ = [
+    "EXAMPLE_NOTIFICATIONS",
+    "AccelerationPulseIn",
+    "CaseList",
+    "CaseResult",
+    "CrashIn",
+    "CrashNotificationIn",
+    "DeltaVPulseIn",
+    "OccupantIn",
+    "StoredCase",
+    "SummaryPulseIn",
+    "VehicleIn",
+]
+
+#: Largest accepted delta-V, km/h (issue 2: "delta-V above 200 km/h refused").
+MAX_DELTA_V_KMH = 200.0
+#: Largest accepted acceleration magnitude, g. [R] Vehicle crash pulses of
+#: passenger cars stay well under 200 g even on a rigid pole; 500 g allows
+#: unfiltered sensor spikes while refusing unit mistakes (m/s^2 sent as g).
+MAX_ACCEL_G = 500.0
+#: Acceleration series: sample-rate bounds, Hz. [R] EDR and crash sensor
+#: channels are sampled at 100 Hz to 20 kHz (SAE J211 recommends >= 10 kHz).
+MIN_SAMPLE_RATE_HZ, MAX_SAMPLE_RATE_HZ = 100.0, 50_000.0
+#: Series length bounds (samples). A pulse needs at least 20 ms of samples at the lowest
+#: rate; 60,000 samples is 3 s at 20 kHz.
+MIN_SERIES_SAMPLES, MAX_SERIES_SAMPLES = 3, 60_000
+#: Series duration bounds, ms: at least 20 ms, at most 3 s.
+MIN_SERIES_MS, MAX_SERIES_MS = 20.0, 3000.0
+#: EDR delta-V records: 49 CFR 563 Table I records 0-250 ms at 100 Hz (10 ms).
+MIN_EDR_INTERVAL_MS, MAX_EDR_INTERVAL_MS = 1.0, 50.0
+#: Hybrid III anthropometry used to map stature and mass to the nearer dummy
+#: (occupant-lpm-notes.md section 2): 50th male 175 cm / 77.7 kg;
+#: 5th female 151 cm / 49.1 kg [S].
+DUMMY_STATURE_MASS = {
+    engine.Body.MALE_50TH: (175.0, 77.7),
+    engine.Body.FEMALE_5TH: (151.0, 49.1),
+}
+
+
+class WireModel(BaseModel):
+    """Base of the wire models: unknown fields refused, non-finite numbers refused."""
+
+    model_config = ConfigDict(extra="forbid", allow_inf_nan=False, frozen=True)
+
+
+# --------------------------------------------------------------------------- pulses
+
+
+def _check_series(values: list[float], name: str, bound: float) -> None:
+    for i, v in enumerate(values):
+        if not math.isfinite(v):
+            raise ValueError(f"{name}[{i}] is not a finite number")
+        if abs(v) > bound:
+            raise ValueError(f"{name}[{i}] = {v} exceeds the plausible magnitude {bound}")
+
+
+class AccelerationPulseIn(WireModel):
+    """Vehicle acceleration histories from the crash sensor (SAE J211 axes)."""
+
+    kind: Literal["acceleration"] = Field(description="Pulse kind tag.")
+    sample_rate_hz: float = Field(
+        ge=MIN_SAMPLE_RATE_HZ,
+        le=MAX_SAMPLE_RATE_HZ,
+        description="Sampling rate of both series, Hz.",
+        examples=[10000.0],
+    )
+    longitudinal_g: list[float] = Field(
+        min_length=MIN_SERIES_SAMPLES,
+        max_length=MAX_SERIES_SAMPLES,
+        description="x (forward) acceleration, g, from time zero. A frontal crash "
+        "decelerates: negative values.",
+    )
+    lateral_g: list[float] = Field(
+        min_length=MIN_SERIES_SAMPLES,
+        max_length=MAX_SERIES_SAMPLES,
+        description="y (right) acceleration, g, same length as `longitudinal_g`.",
+    )
+
+    @model_validator(mode="after")
+    def _consistent(self) -> AccelerationPulseIn:
+        if len(self.longitudinal_g) != len(self.lateral_g):
+            raise ValueError("longitudinal_g and lateral_g must have the same length")
+        _check_series(self.longitudinal_g, "longitudinal_g", MAX_ACCEL_G)
+        _check_series(self.lateral_g, "lateral_g", MAX_ACCEL_G)
+        duration_ms = 1000.0 * (len(self.longitudinal_g) - 1) / self.sample_rate_hz
+        if not MIN_SERIES_MS <= duration_ms <= MAX_SERIES_MS:
+            raise ValueError(
+                f"the series spans {duration_ms:.1f} ms; it must span "
+                f"{MIN_SERIES_MS:g} to {MAX_SERIES_MS:g} ms"
+            )
+        return self
+
+    def to_engine(self) -> engine.AccelerationPulse:
+        return engine.AccelerationPulse(
+            sample_rate_hz=self.sample_rate_hz,
+            longitudinal_g=tuple(self.longitudinal_g),
+            lateral_g=tuple(self.lateral_g),
+        )
+
+
+class DeltaVPulseIn(WireModel):
+    """A 49 CFR 563 EDR record: cumulative delta-V at a fixed interval."""
+
+    kind: Literal["delta_v"] = Field(description="Pulse kind tag.")
+    interval_ms: float = Field(
+        default=10.0,
+        ge=MIN_EDR_INTERVAL_MS,
+        le=MAX_EDR_INTERVAL_MS,
+        description="Interval between samples, ms (10 ms in 49 CFR 563 Table I).",
+    )
+    longitudinal_kmh: list[float] = Field(
+        min_length=MIN_SERIES_SAMPLES,
+        max_length=1000,
+        description="Cumulative x delta-V from time zero, km/h (negative in a frontal crash).",
+    )
+    lateral_kmh: list[float] = Field(
+        min_length=MIN_SERIES_SAMPLES,
+        max_length=1000,
+        description="Cumulative y delta-V from time zero, km/h, same length.",
+    )
+
+    @model_validator(mode="after")
+    def _consistent(self) -> DeltaVPulseIn:
+        if len(self.longitudinal_kmh) != len(self.lateral_kmh):
+            raise ValueError("longitudinal_kmh and lateral_kmh must have the same length")
+        _check_series(self.longitudinal_kmh, "longitudinal_kmh", MAX_DELTA_V_KMH)
+        _check_series(self.lateral_kmh, "lateral_kmh", MAX_DELTA_V_KMH)
+        for i, (x, y) in enumerate(zip(self.longitudinal_kmh, self.lateral_kmh, strict=True)):
+            if math.hypot(x, y) > MAX_DELTA_V_KMH:
+                raise ValueError(
+                    f"resultant delta-V at sample {i} is {math.hypot(x, y):.1f} km/h, above "
+                    f"{MAX_DELTA_V_KMH:g} km/h"
+                )
+        duration_ms = self.interval_ms * (len(self.longitudinal_kmh) - 1)
+        if not MIN_SERIES_MS <= duration_ms <= MAX_SERIES_MS:
+            raise ValueError(
+                f"the record spans {duration_ms:.1f} ms; it must span "
+                f"{MIN_SERIES_MS:g} to {MAX_SERIES_MS:g} ms"
+            )
+        return self
+
+    def to_engine(self) -> engine.DeltaVPulse:
+        return engine.DeltaVPulse(
+            interval_ms=self.interval_ms,
+            longitudinal_kmh=tuple(self.longitudinal_kmh),
+            lateral_kmh=tuple(self.lateral_kmh),
+        )
+
+
+class SummaryPulseIn(WireModel):
+    """Crash summary: the engine builds a haversine pulse a(t) = A sin^2(pi t / T)."""
+
+    kind: Literal["summary"] = Field(description="Pulse kind tag.")
+    delta_v_kmh: float = Field(
+        gt=0.0, le=MAX_DELTA_V_KMH, description="Resultant delta-V, km/h.", examples=[56.0]
+    )
+    pdof_deg: float = Field(
+        ge=0.0,
+        lt=360.0,
+        description="Principal direction of force, deg clockwise from straight ahead "
+        "(0 frontal, 90 right side, 180 rear, 270 left side).",
+        examples=[0.0],
+    )
+    duration_ms: float | None = Field(
+        default=None,
+        ge=20.0,
+        le=400.0,
+        description="Pulse duration T, ms; omitted: chosen by the engine from delta-V.",
+    )
+
+    def to_engine(self) -> engine.SummaryPulse:
+        return engine.SummaryPulse(
+            delta_v_kmh=self.delta_v_kmh, pdof_deg=self.pdof_deg, duration_ms=self.duration_ms
+        )
+
+
+PulseIn = Annotated[
+    AccelerationPulseIn | DeltaVPulseIn | SummaryPulseIn,
+    Field(discriminator="kind", description="The crash pulse, told apart by `kind`."),
+]
+
+
+# ------------------------------------------------------------------- notification
+
+
+class VehicleIn(WireModel):
+    """The vehicle that crashed."""
+
+    model: str = Field(
+        default="compact_sedan",
+        min_length=1,
+        max_length=64,
+        description="Occupant-model parameter set (vehicle class). Default `compact_sedan`: "
+        "a compact sedan of the 2010 Toyota Yaris class.",
+    )
+    vin: Annotated[str, StringConstraints(pattern=r"^[A-HJ-NPR-Z0-9]{17}$")] | None = Field(
+        default=None, description="Vehicle identification number (17 characters, no I, O, Q)."
+    )
+    drive_side: engine.DriveSide = Field(
+        default=engine.DriveSide.LEFT,
+        description="Side the driver sits on: `left` for left-hand-drive vehicles.",
+    )
+
+
+class CrashIn(WireModel):
+    """What the vehicle measured of the crash."""
+
+    pulse: PulseIn
+    multiple_impacts: bool = Field(default=False, description="More than one impact event.")
+    rollover: bool = Field(default=False, description="The vehicle rolled over.")
+
+
+class OccupantIn(WireModel):
+    """One front-row occupant and the restraints around them."""
+
+    seat: engine.Seat = Field(description="Seat of the occupant.")
+    body: engine.Body | None = Field(
+        default=None,
+        description="Anthropometric class. Omitted: the nearer of the two to `stature_cm` "
+        "and `mass_kg`, or `male_50th` when neither is known (reported as an assumption).",
+    )
+    stature_cm: float | None = Field(
+        default=None, ge=50.0, le=250.0, description="Occupant stature, cm."
+    )
+    mass_kg: float | None = Field(default=None, ge=10.0, le=300.0, description="Occupant mass, kg.")
+    age_years: float | None = Field(default=None, ge=0.0, le=120.0, description="Age, years.")
+    sex: engine.Sex | None = Field(default=None, description="Sex of the occupant.")
+    belted: bool = Field(description="Seat belt fastened.")
+    frontal_airbag: engine.AirbagState = Field(
+        description="Frontal airbag in front of this occupant."
+    )
+    airbag_fire_time_ms: float | None = Field(
+        default=None, ge=0.0, le=300.0, description="Time from time zero to airbag firing, ms."
+    )
+    pretensioner_fired: bool | None = Field(
+        default=None, description="Belt pretensioner fired (EDR Table II)."
+    )
+    posture_lumbar_flexion_deg: float = Field(
+        default=engine.NEUTRAL_LUMBAR_FLEXION_DEG,
+        ge=-20.0,
+        le=60.0,
+        description="Lumbar flexion, deg: neutral 5.8, forward leaning up to 25. Values "
+        "outside the occupant models' range are clamped (reported as an assumption).",
+    )
+    seat_track_mm: float = Field(
+        default=0.0,
+        ge=-300.0,
+        le=300.0,
+        description="Seat track position relative to mid track, mm, positive forward.",
+    )
+    posture_sd_deg: float | None = Field(
+        default=None, gt=0.0, le=30.0, description="Posture sensor standard deviation, deg."
+    )
+    seat_track_sd_mm: float | None = Field(
+        default=None, gt=0.0, le=200.0, description="Seat position sensor standard deviation, mm."
+    )
+
+    def resolved_body(self) -> tuple[engine.Body, str | None]:
+        """The dummy class to use and, when it was not given, how it was chosen."""
+        if self.body is not None:
+            return self.body, None
+        if self.stature_cm is None and self.mass_kg is None:
+            return engine.Body.MALE_50TH, "body unknown: Hybrid III 50th male assumed"
+
+        def distance(b: engine.Body) -> float:
+            stature, mass = DUMMY_STATURE_MASS[b]
+            d = 0.0
+            if self.stature_cm is not None:
+                d += ((self.stature_cm - stature) / stature) ** 2
+            if self.mass_kg is not None:
+                d += ((self.mass_kg - mass) / mass) ** 2
+            return d
+
+        body = min(DUMMY_STATURE_MASS, key=distance)
+        return body, f"body mapped from stature/mass to the nearer dummy: {body.value}"
+
+    def to_engine(self) -> tuple[engine.Occupant, str | None]:
+        body, note = self.resolved_body()
+        return (
+            engine.Occupant(
+                seat=self.seat,
+                body=body,
+                belted=self.belted,
+                frontal_airbag=self.frontal_airbag,
+                age_years=self.age_years,
+                sex=self.sex,
+                airbag_fire_time_ms=self.airbag_fire_time_ms,
+                pretensioner_fired=self.pretensioner_fired,
+                posture_lumbar_flexion_deg=self.posture_lumbar_flexion_deg,
+                seat_track_mm=self.seat_track_mm,
+                posture_sd_deg=self.posture_sd_deg,
+                seat_track_sd_mm=self.seat_track_sd_mm,
+            ),
+            note,
+        )
+
+
+def _haversine_example(delta_v_kmh: float, duration_ms: float, n: int) -> list[float]:
+    """A short frontal haversine pulse for the OpenAPI example (1 kHz)."""
+    # delta-V = A g T / 2 for a(t) = A sin^2(pi t / T)
+    amplitude_g = 2.0 * delta_v_kmh / 3.6 / (9.80665 * duration_ms / 1000.0)
+    out = []
+    for i in range(n):
+        t_ms = float(i)
+        a = amplitude_g * math.sin(math.pi * t_ms / duration_ms) ** 2 if t_ms <= duration_ms else 0
+        out.append(round(-a, 3))
+    return out
+
+
+EXAMPLE_NOTIFICATIONS: dict[str, dict[str, Any]] = {
+    "summary": {
+        "summary": "Frontal crash, summary pulse",
+        "description": "56 km/h frontal, belted driver with deployed airbag.",
+        "value": {
+            "event_id": "tsp-7d1c2a90-0001",
+            "occurred_at": "2026-11-23T08:15:30Z",
+            "vehicle": {"model": "compact_sedan", "drive_side": "left"},
+            "crash": {
+                "pulse": {"kind": "summary", "delta_v_kmh": 56.0, "pdof_deg": 0.0},
+                "multiple_impacts": False,
+                "rollover": False,
+            },
+            "occupants": [
+                {
+                    "seat": "driver",
+                    "body": "male_50th",
+                    "age_years": 42,
+                    "sex": "male",
+                    "belted": True,
+                    "frontal_airbag": "deployed",
+                    "airbag_fire_time_ms": 15,
+                    "pretensioner_fired": True,
+                }
+            ],
+        },
+    },
+    "delta_v": {
+        "summary": "Near-side crash, EDR delta-V record",
+        "description": "49 CFR 563 record at 10 ms: a left-side impact on a left-hand-drive "
+        "car; the driver is on the near side, the passenger on the far side.",
+        "value": {
+            "event_id": "tsp-7d1c2a90-0002",
+            "occurred_at": "2026-11-23T09:02:11+01:00",
+            "vehicle": {"model": "compact_sedan", "drive_side": "left"},
+            "crash": {
+                "pulse": {
+                    "kind": "delta_v",
+                    "interval_ms": 10,
+                    "longitudinal_kmh": [0, -0.5, -1.2, -1.8, -2.1, -2.2, -2.2, -2.2, -2.2],
+                    "lateral_kmh": [0, 6.0, 15.0, 24.0, 29.0, 31.0, 31.5, 31.5, 31.5],
+                },
+                "multiple_impacts": False,
+                "rollover": False,
+            },
+            "occupants": [
+                {
+                    "seat": "driver",
+                    "stature_cm": 162,
+                    "mass_kg": 58,
+                    "age_years": 67,
+                    "sex": "female",
+                    "belted": True,
+                    "frontal_airbag": "not_deployed",
+                },
+                {
+                    "seat": "front_passenger",
+                    "body": "male_50th",
+                    "age_years": 35,
+                    "sex": "male",
+                    "belted": False,
+                    "frontal_airbag": "not_deployed",
+                },
+            ],
+        },
+    },
+    "acceleration": {
+        "summary": "Frontal crash, acceleration pulse",
+        "description": "Sensor acceleration at 1 kHz, 48 km/h in 90 ms, unbelted passenger "
+        "leaning forward, seat moved 40 mm forward.",
+        "value": {
+            "event_id": "tsp-7d1c2a90-0003",
+            "occurred_at": "2026-11-23T10:44:00Z",
+            "vehicle": {"model": "compact_sedan", "drive_side": "left"},
+            "crash": {
+                "pulse": {
+                    "kind": "acceleration",
+                    "sample_rate_hz": 1000,
+                    "longitudinal_g": _haversine_example(48.0, 90.0, 121),
+                    "lateral_g": [0.0] * 121,
+                },
+                "multiple_impacts": False,
+                "rollover": False,
+            },
+            "occupants": [
+                {
+                    "seat": "front_passenger",
+                    "body": "female_5th",
+                    "age_years": 29,
+                    "sex": "female",
+                    "belted": False,
+                    "frontal_airbag": "deployed",
+                    "posture_lumbar_flexion_deg": 20.0,
+                    "seat_track_mm": 40.0,
+                }
+            ],
+        },
+    },
+}
+
+
+class CrashNotificationIn(WireModel):
+    """A crash notification as the call center forwards it."""
+
+    event_id: str = Field(
+        min_length=1,
+        max_length=128,
+        pattern=r"^[\x21-\x7e]+$",
+        description="The sender's unique id of the crash event (printable ASCII, no spaces). "
+        "Re-sending the same event_id with the same body returns the original case.",
+    )
+    occurred_at: AwareDatetime = Field(description="Time of the crash, RFC 3339 with offset.")
+    vehicle: VehicleIn = Field(default_factory=VehicleIn, description="The vehicle.")
+    crash: CrashIn = Field(description="The crash measurements.")
+    occupants: list[OccupantIn] = Field(
+        min_length=1, max_length=2, description="Front-row occupants, one per seat."
+    )
+
+    model_config = ConfigDict(
+        json_schema_extra={"examples": [EXAMPLE_NOTIFICATIONS["summary"]["value"]]}
+    )
+
+    @model_validator(mode="after")
+    def _unique_seats(self) -> CrashNotificationIn:
+        seats = [o.seat for o in self.occupants]
+        if len(set(seats)) != len(seats):
+            raise ValueError("each seat may appear once in `occupants`")
+        return self
+
+    def to_engine(self) -> tuple[engine.CrashNotification, list[str]]:
+        """Convert to the engine's frozen input and the assumptions made on the way."""
+        occupants: list[engine.Occupant] = []
+        notes: list[str] = []
+        for i, occ in enumerate(self.occupants):
+            converted, note = occ.to_engine()
+            occupants.append(converted)
+            if note:
+                notes.append(f"occupants[{i}]: {note}")
+        return (
+            engine.CrashNotification(
+                event_id=self.event_id,
+                vehicle_model=self.vehicle.model,
+                drive_side=self.vehicle.drive_side,
+                pulse=self.crash.pulse.to_engine(),
+                multiple_impacts=self.crash.multiple_impacts,
+                rollover=self.crash.rollover,
+                occupants=tuple(occupants),
+            ),
+            notes,
+        )
+
+
+# ------------------------------------------------------------------------- results
+
+
+class OutModel(BaseModel):
+    """Base of the response models."""
+
+    model_config = ConfigDict(frozen=True)
+
+
+class TriageOut(OutModel):
+    """An ISS15+ triage decision."""
+
+    iss15_plus: bool = Field(description="True: likely ISS >= 15, transport to a Level I center.")
+    probability: float = Field(ge=0, le=1, description="Estimated P(ISS >= 15) or its proxy.")
+    probability_ci95: tuple[float, float] = Field(
+        description="95% interval of `probability` [low, high]."
+    )
+    threshold: float = Field(description="Decision threshold on `probability`.")
+    recommendation: str = Field(description="What to do with the patient, in words.")
+
+
+class IssOut(OutModel):
+    """Injury Severity Score estimate."""
+
+    estimate: int = Field(ge=0, le=75, description="ISS point estimate (Baker rule).")
+    ci95: tuple[float, float] | None = Field(
+        default=None, description="95% interval of ISS, when the engine provides it."
+    )
+
+
+class HaversineOut(OutModel):
+    """Haversine fit a(t) = A sin^2(pi t / T) of the resultant pulse."""
+
+    amplitude_g: float = Field(description="A, g.")
+    duration_ms: float = Field(description="T, ms.")
+    r_squared: float = Field(description="Coefficient of determination of the fit.")
+
+
+class PulseOut(OutModel):
+    """What the engine derived from the pulse."""
+
+    delta_v_kmh: float = Field(description="Resultant delta-V, km/h.")
+    delta_v_longitudinal_kmh: float = Field(description="x delta-V, km/h.")
+    delta_v_lateral_kmh: float = Field(description="y delta-V, km/h.")
+    pdof_deg: float = Field(description="Principal direction of force, deg clockwise.")
+    peak_accel_g: float = Field(description="Peak resultant acceleration, g.")
+    duration_ms: float = Field(description="Pulse duration, ms.")
+    haversine: HaversineOut
+
+
+class OccupantOut(OutModel):
+    """The triage of one occupant."""
+
+    seat: engine.Seat
+    body: engine.Body = Field(description="Dummy class the engine used.")
+    impact_mode: str = Field(description="frontal, rear, near_side or far_side (nearest).")
+    impact_angle_deg: float = Field(description="PDOF relative to the mode's axis, deg.")
+    in_lpm_coverage: bool = Field(description="The PDOF lies inside an occupant model's range.")
+    method: str = Field(description="Engine that answered: `lpm` or `baseline`.")
+    iss: IssOut | None = Field(default=None, description="ISS where the engine provides it.")
+    region_ais: dict[str, int] | None = Field(
+        default=None, description="AIS per ISS body region, where the engine provides it."
+    )
+    measures: dict[str, float] | None = Field(
+        default=None, description="Injury measures (HIC15, Nij, ...), where computed."
+    )
+    triage: TriageOut
+    baseline: TriageOut = Field(
+        description="The statistical baseline's answer (second opinion; outcome is "
+        "police-reported serious injury, a proxy for ISS15+)."
+    )
+
+
+class ModelVersionOut(OutModel):
+    """Version and checksum of one model artifact."""
+
+    version: str = Field(description="Version of the model artifact.")
+    sha256: str = Field(description="SHA-256 of the artifact's bytes.")
+
+
+class CaseResult(OutModel):
+    """The answer to one notification."""
+
+    case_id: str | None = Field(description="Id of the stored case (null from the CLI).")
+    event_id: str = Field(description="The sender's event id.")
+    received_at: datetime = Field(description="When the service received the notification.")
+    triage: TriageOut = Field(description="The case-level decision: the worst occupant's.")
+    occupants: list[OccupantOut] = Field(description="One result per occupant, in input order.")
+    pulse: PulseOut
+    assumptions: list[str] = Field(
+        default_factory=list, description="What the engine assumed or clamped."
+    )
+    engine_version: str = Field(description="Version of the engine code.")
+    models: dict[str, ModelVersionOut] = Field(description="Every model used: version, sha256.")
+    timings_ms: dict[str, float] = Field(description="Time spent per step, ms.")
+
+
+class StoredCase(OutModel):
+    """A stored case, as the audit trail holds it."""
+
+    case_id: str = Field(description="Id of the case.")
+    event_id: str = Field(description="The sender's event id.")
+    client_name: str = Field(description="Name of the API key that submitted it.")
+    received_at: datetime = Field(description="When the notification was received.")
+    stored_at: datetime = Field(description="When the case was committed.")
+    request_sha256: str = Field(description="SHA-256 of the canonical JSON of the notification.")
+    notification: dict[str, Any] = Field(description="The notification as received.")
+    result: CaseResult = Field(description="The result exactly as it was answered.")
+    models: dict[str, ModelVersionOut] = Field(description="Every model used: version, sha256.")
+
+
+class CaseSummary(OutModel):
+    """One row of the case list."""
+
+    case_id: str = Field(description="Id of the case.")
+    event_id: str = Field(description="The sender's event id.")
+    client_name: str = Field(description="Name of the API key that submitted it.")
+    received_at: datetime = Field(description="When the notification was received.")
+    iss15_plus: bool = Field(description="Case-level decision.")
+    probability: float = Field(description="Case-level probability.")
+    impact_modes: list[str] = Field(description="Impact mode of each occupant.")
+
+
+class CaseList(OutModel):
+    """A page of cases, newest first."""
+
+    items: list[CaseSummary] = Field(description="The cases of this page.")
+    next_cursor: str | None = Field(description="Pass as `cursor` for the next page; null at end.")

@@ -1,0 +1,64 @@
+"""The one settings object (pydantic-settings, environment prefix ``AACN_``)."""
+
+from __future__ import annotations
+
+from functools import lru_cache
+from pathlib import Path
+
+from pydantic import Field
+from pydantic_settings import BaseSettings, SettingsConfigDict
+
+__all__ = ["Settings", "get_settings"]
+
+
+class Settings(BaseSettings):
+    """Service configuration, read from ``AACN_*`` environment variables (and ``.env``)."""
+
+    model_config = SettingsConfigDict(
+        env_prefix="AACN_", env_file=".env", env_ignore_empty=True, extra="ignore"
+    )
+
+    database_url: str = Field(
+        default="sqlite:///./aacn-triage.db",
+        description="SQLAlchemy URL. SQLite file by default; PostgreSQL as "
+        "postgresql+psycopg://user:pass@host/db.",
+    )
+    host: str = Field(default="127.0.0.1", description="Address `serve` binds to.")
+    port: int = Field(default=8000, ge=1, le=65535, description="Port `serve` listens on.")
+    auto_migrate: bool = Field(
+        default=True,
+        description="Run Alembic `upgrade head` when the service starts.",
+    )
+    max_body_bytes: int = Field(
+        default=1_048_576, ge=1024, description="Largest accepted request body, bytes (413 above)."
+    )
+    page_default_limit: int = Field(default=50, ge=1, description="Default page size of lists.")
+    page_max_limit: int = Field(default=200, ge=1, description="Largest page size of lists.")
+    triage_threshold: float | None = Field(
+        default=None,
+        gt=0.0,
+        lt=1.0,
+        description="Override of the ISS15+ decision threshold on P(ISS>=15); None uses "
+        "each model's documented threshold.",
+    )
+    posture_sd_deg: float = Field(
+        default=5.0 / 1.959964,
+        gt=0.0,
+        description="Default posture sensor SD, deg: within 5 deg 95% of the time (issue 5).",
+    )
+    seat_track_sd_mm: float = Field(
+        default=50.0 / 1.959964,
+        gt=0.0,
+        description="Default seat position sensor SD, mm: within 5 cm 95% of the time (issue 5).",
+    )
+    numba_cache_dir: Path | None = Field(
+        default=None, description="Directory for numba's compiled-kernel cache (NUMBA_CACHE_DIR)."
+    )
+    log_level: str = Field(default="INFO", description="Python logging level.")
+    docs_enabled: bool = Field(default=True, description="Serve /docs and /openapi.json.")
+
+
+@lru_cache(maxsize=1)
+def get_settings() -> Settings:
+    """The process-wide settings, read once."""
+    return Settings()

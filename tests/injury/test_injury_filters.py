@@ -1,0 +1,131 @@
+"""CFC filter: coefficients, DC gain, -3 dB point, zero phase, padding, validation."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from scipy.signal import freqz
+
+from models.injury.filters import (
+    ISO_6487_DESIGN_FACTOR,
+    SAE_J211_DESIGN_FACTOR,
+    cfc_coefficients,
+    cfc_filter,
+)
+
+CLASSES = (60, 180, 600, 1000)
+
+
+def _fb_gain(cfc: int, fs: float, freqs: np.ndarray, standard: str = "sae_j211") -> np.ndarray:
+    """Magnitude of the forward-backward filter: |H|^2 of one pass."""
+    b, a = cfc_coefficients(fs, cfc, standard=standard)  # type: ignore[arg-type]
+    _, h = freqz(b, a, worN=freqs, fs=fs)
+    return np.abs(h) ** 2
+
+
+def test_coefficients_follow_the_j211_formula() -> None:
+    fs, cfc = 10_000.0, 180
+    wd = 2 * math.pi * cfc * 2.0775
+    wa = math.tan(wd / fs / 2)
+    den = 1 + math.sqrt(2) * wa + wa**2
+    a0 = wa**2 / den
+    b1 = -2 * (wa**2 - 1) / den
+    b2 = (-1 + math.sqrt(2) * wa - wa**2) / den
+    b, a = cfc_coefficients(fs, cfc)
+    assert b == pytest.approx((a0, 2 * a0, a0), rel=1e-12)
+    assert a == pytest.approx((1.0, -b1, -b2), rel=1e-12)
+
+
+@pytest.mark.parametrize("cfc", CLASSES)
+@pytest.mark.parametrize("fs", [10_000.0, 20_000.0, 100_000.0])
+def test_one_pass_has_unit_dc_gain(cfc: int, fs: float) -> None:
+    b, a = cfc_coefficients(fs, cfc)
+    assert sum(b) / sum(a) == pytest.approx(1.0, rel=1e-12)
+
+
+@pytest.mark.parametrize("cfc", CLASSES)
+def test_constant_signal_is_returned_unchanged(cfc: int) -> None:
+    x = np.full(500, 37.5)
+    np.testing.assert_allclose(cfc_filter(x, 10_000.0, cfc), x, rtol=1e-12)
+
+
+@pytest.mark.parametrize("cfc", CLASSES)
+def test_minus_3db_point_near_1_667_cfc(cfc: int) -> None:
+    # High sampling rate (>= 50x the class), where J211 documents -3 dB at ~1.667 CFC.
+    fs = 100_000.0
+    freqs = np.linspace(0.5 * cfc, 3.0 * cfc, 20_001)
+    g = _fb_gain(cfc, fs, freqs)
+    f3 = freqs[np.argmax(g < 1 / math.sqrt(2))]
+    assert f3 / cfc == pytest.approx(1.667, rel=0.01)
+
+
+def test_response_is_flat_in_band_and_attenuates_above() -> None:
+    fs, cfc = 20_000.0, 1000
+    g = _fb_gain(cfc, fs, np.array([0.1 * cfc, 0.5 * cfc, 1.0 * cfc, 3.0 * cfc]))
+    assert g[0] == pytest.approx(1.0, abs=1e-3)
+    assert g[1] > 0.99
+    assert 0.85 < g[2] < 1.0  # J211 corridor: within about -1 dB at CFC
+    assert g[3] < 0.2
+
+
+@pytest.mark.parametrize("cfc", [60, 600])
+def test_sine_at_minus_3db_frequency_through_cfc_filter(cfc: int) -> None:
+    fs = 100 * cfc
+    t = np.arange(0, 200 / cfc, 1 / fs)
+    x = np.sin(2 * np.pi * 1.667 * cfc * t)
+    y = cfc_filter(x, fs, cfc)
+    mid = slice(len(t) // 4, 3 * len(t) // 4)
+    assert np.std(y[mid]) / np.std(x[mid]) == pytest.approx(1 / math.sqrt(2), abs=0.01)
+
+
+def test_iso_variant_uses_its_own_design_factor() -> None:
+    fs, cfc = 100_000.0, 600
+    freqs = np.linspace(0.5 * cfc, 3.0 * cfc, 20_001)
+    f_j211 = freqs[np.argmax(_fb_gain(cfc, fs, freqs) < 1 / math.sqrt(2))]
+    f_iso = freqs[np.argmax(_fb_gain(cfc, fs, freqs, "iso_6487") < 1 / math.sqrt(2))]
+    ratio = ISO_6487_DESIGN_FACTOR / SAE_J211_DESIGN_FACTOR
+    assert f_iso / f_j211 == pytest.approx(ratio, rel=2e-3)
+
+
+def test_zero_phase_keeps_a_symmetric_pulse_symmetric() -> None:
+    fs = 10_000.0
+    t = np.arange(-0.05, 0.05 + 0.5 / fs, 1 / fs)
+    x = np.exp(-((t / 0.004) ** 2)) * 50.0
+    y = cfc_filter(x, fs, 180)
+    assert int(np.argmax(y)) == int(np.argmax(x))
+    np.testing.assert_allclose(y, y[::-1], atol=1e-9)
+
+
+def test_linear_trend_passes_unchanged_thanks_to_odd_padding() -> None:
+    x = np.linspace(-3.0, 12.0, 2000)
+    np.testing.assert_allclose(cfc_filter(x, 10_000.0, 60), x, atol=1e-6)
+
+
+def test_short_and_single_sample_signals() -> None:
+    np.testing.assert_array_equal(cfc_filter([4.0], 10_000.0, 1000), [4.0])
+    y = cfc_filter([1.0, 1.0, 1.0], 10_000.0, 60)
+    np.testing.assert_allclose(y, 1.0)
+
+
+@pytest.mark.parametrize(
+    ("args", "name"),
+    [
+        (([1.0, 2.0], 10_000.0, 100), "`cfc`"),
+        (([1.0, 2.0], -1.0, 60), "`sample_rate_hz`"),
+        (([1.0, 2.0], float("nan"), 60), "`sample_rate_hz`"),
+        (([1.0, 2.0], 3000.0, 1000), "`sample_rate_hz`"),
+        (([[1.0, 2.0]], 10_000.0, 60), "`signal`"),
+        (([], 10_000.0, 60), "`signal`"),
+        (([1.0, float("nan")], 10_000.0, 60), "`signal`"),
+    ],
+)
+def test_invalid_arguments_name_the_argument(args: tuple[object, ...], name: str) -> None:
+    with pytest.raises(ValueError, match=name):
+        cfc_filter(*args)  # type: ignore[arg-type]
+
+
+def test_unknown_standard() -> None:
+    with pytest.raises(ValueError, match="`standard`"):
+        cfc_filter([1.0, 2.0], 10_000.0, 60, standard="din")  # type: ignore[arg-type]

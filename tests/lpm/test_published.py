@@ -1,0 +1,75 @@
+"""Against published values (issue 4, "Done when").
+
+Frontal: a belted, airbag-equipped Hybrid III 50M in a 56 km/h full-width
+rigid-barrier pulse of a compact car. The range each measure must fall in:
+
+* upper bounds: the FMVSS 208 injury limits for this very test (56 km/h
+  rigid barrier, belted 50M), which every car sold in the US meets and which
+  NCAP reports against: HIC15 <= 700 [V] (49 CFR 571.208 S6.2), Nij <= 1.0,
+  chest deflection <= 63 mm, chest 3 ms <= 60 g [U]
+  (shared/reference/injury-criteria.md section 1; constants in
+  models/injury/criteria.py);
+* lower bounds: a belted 50M at 56 km/h always loads the restraints; NCAP
+  frontal results of airbag-era small cars have HIC15 of the order of
+  100-600 and chest deflections of 20-50 mm (the 2007 Yaris moderate-overlap
+  test, a different test, gave HIC15 612, injury-criteria.md section 6 [U]).
+  The lower bounds below (HIC15 >= 80, deflection >= 15 mm, Nij >= 0.1,
+  3 ms >= 25 g) are engineering floors [R]; the NCAP-MGA-2006-011 (2010
+  Yaris) dummy values are not in the references yet (open item).
+
+Near side: the reference paper's 50 km/h moving-barrier case without side
+airbags gives ISS >= 15 for the restrained 50M (paper section 3.2: "only the
+side impact MVCs were serious ... due to the absence of side impact airbags").
+"""
+
+from __future__ import annotations
+
+import pytest
+
+from models.impact_mode import ImpactMode
+from models.injury.criteria import (
+    FMVSS208_CHEST_A3MS_LIMIT_G,
+    FMVSS208_CHEST_DEFLECTION_LIMIT_MM,
+    FMVSS208_HIC15_LIMIT,
+    FMVSS208_NIJ_LIMIT,
+)
+from models.lpm.params import ParameterSet
+from models.lpm.pulses import ncap_frontal_pulse, side_pulse
+from models.lpm.simulate import simulate
+from models.notification import Body
+from tests.lpm.helpers import occupant
+
+#: Published (upper) and floor (lower) bounds per measure, see the module docstring.
+FRONTAL_RANGES = {
+    "hic15": (80.0, FMVSS208_HIC15_LIMIT),
+    "nij": (0.1, FMVSS208_NIJ_LIMIT),
+    "chest_deflection_mm": (15.0, FMVSS208_CHEST_DEFLECTION_LIMIT_MM[Body.MALE_50TH]),
+    "chest_a3ms_g": (25.0, FMVSS208_CHEST_A3MS_LIMIT_G),
+}
+
+
+def test_ncap_frontal_belted_airbag_50m_inside_published_ranges(params: ParameterSet) -> None:
+    r = simulate(*ncap_frontal_pulse(), ImpactMode.FRONTAL, occupant(Body.MALE_50TH), params)
+    assert r.status == 0
+    for k, (lo, hi) in FRONTAL_RANGES.items():
+        v = getattr(r.measures, k)
+        assert lo <= v <= hi, f"{k} = {v:.2f} outside [{lo}, {hi}]"
+
+
+@pytest.mark.parametrize(
+    "body",
+    [
+        Body.MALE_50TH,
+        pytest.param(
+            Body.FEMALE_5TH,
+            marks=pytest.mark.xfail(
+                strict=True, reason="open item: the 5F reaches ISS 13 (chest AIS 3, head AIS 2)"
+            ),
+        ),
+    ],
+)
+def test_near_side_50_kmh_without_side_airbags_is_iss15(params: ParameterSet, body: Body) -> None:
+    """IIHS-type side test: 1500 kg barrier at 50 km/h into a 1100 kg car."""
+    r = simulate(*side_pulse(), ImpactMode.NEAR_SIDE, occupant(body), params)
+    assert r.assessment is not None
+    assert r.assessment.iss >= 15, (r.measures, r.assessment.region_ais)

@@ -1,0 +1,119 @@
+"""POST/GET /v1/cases against a real database (SQLite and PostgreSQL)."""
+
+from __future__ import annotations
+
+import pytest
+
+from service.schemas import EXAMPLE_NOTIFICATIONS
+from tests.support import ApiClient, assert_problem, example, summary
+
+
+@pytest.mark.parametrize("kind", sorted(EXAMPLE_NOTIFICATIONS))
+def test_each_documented_example_is_triaged_stored_and_read_back(
+    api_any_db: ApiClient, kind: str
+) -> None:
+    body = example(kind)
+    response = api_any_db.client.post(
+        "/v1/cases", json=body, headers=api_any_db.headers("submitter")
+    )
+    assert response.status_code == 201, response.text
+    result = response.json()
+    assert response.headers["Location"] == f"/v1/cases/{result['case_id']}"
+    assert response.headers["Idempotent-Replayed"] == "false"
+    assert result["event_id"] == body["event_id"]
+    assert len(result["occupants"]) == len(body["occupants"])
+    lo, hi = result["triage"]["probability_ci95"]
+    assert 0.0 <= lo <= result["triage"]["probability"] <= hi <= 1.0
+    assert lo < hi, "the interval comes from the coefficient uncertainty: never degenerate"
+    assert result["models"]["baseline"]["sha256"]
+
+    stored = api_any_db.client.get(
+        response.headers["Location"], headers=api_any_db.headers("auditor")
+    )
+    assert stored.status_code == 200, stored.text
+    case = stored.json()
+    assert case["result"] == result, "GET returns the case exactly as answered"
+    assert case["notification"] == body, "the notification is stored as received"
+    assert case["client_name"] == "submitter-client"
+    assert case["models"] == result["models"]
+
+
+def test_case_level_triage_is_the_worst_occupant(api: ApiClient) -> None:
+    body = example("delta_v")
+    result = api.client.post("/v1/cases", json=body, headers=api.headers("submitter")).json()
+    worst = max(o["triage"]["probability"] for o in result["occupants"])
+    assert result["triage"]["probability"] == worst
+
+
+def test_same_event_same_body_replays_without_storing(api_any_db: ApiClient) -> None:
+    body = summary(event_id="evt-replay-1")
+    h = api_any_db.headers("submitter")
+    first = api_any_db.client.post("/v1/cases", json=body, headers=h)
+    assert first.status_code == 201
+    # same JSON document, keys in another order: the same body
+    reordered = dict(reversed(list(body.items())))
+    again = api_any_db.client.post("/v1/cases", json=reordered, headers=h)
+    assert again.status_code == 200, again.text
+    assert again.headers["Idempotent-Replayed"] == "true"
+    assert again.json() == first.json()
+    listing = api_any_db.client.get("/v1/cases", headers=api_any_db.headers("auditor")).json()
+    assert [c["case_id"] for c in listing["items"]] == [first.json()["case_id"]]
+
+
+def test_same_event_different_body_is_a_conflict(api_any_db: ApiClient) -> None:
+    h = api_any_db.headers("submitter")
+    assert (
+        api_any_db.client.post(
+            "/v1/cases", json=summary(50.0, event_id="evt-409"), headers=h
+        ).status_code
+        == 201
+    )
+    conflict = api_any_db.client.post(
+        "/v1/cases", json=summary(60.0, event_id="evt-409"), headers=h
+    )
+    problem = assert_problem(conflict, 409)
+    assert "evt-409" in problem["detail"]
+
+
+def test_event_ids_are_per_client(api: ApiClient) -> None:
+    body = summary(event_id="evt-shared")
+    a = api.client.post("/v1/cases", json=body, headers=api.headers("submitter"))
+    b = api.client.post("/v1/cases", json=body, headers=api.headers("submitter2"))
+    assert a.status_code == b.status_code == 201
+    assert a.json()["case_id"] != b.json()["case_id"]
+
+
+def test_auth_missing_unknown_and_wrong_role(api: ApiClient) -> None:
+    body = summary()
+    assert_problem(api.client.post("/v1/cases", json=body), 401)
+    assert_problem(
+        api.client.post("/v1/cases", json=body, headers={"Authorization": "Bearer aacn_nope"}),
+        401,
+    )
+    assert_problem(api.client.get("/v1/cases"), 401)
+    assert_problem(api.client.post("/v1/cases", json=body, headers=api.headers("auditor")), 403)
+    assert_problem(api.client.get("/v1/cases", headers=api.headers("submitter")), 403)
+    # admins may do both
+    created = api.client.post("/v1/cases", json=body, headers=api.headers("admin"))
+    assert created.status_code == 201
+    assert (
+        api.client.get(created.headers["Location"], headers=api.headers("admin")).status_code == 200
+    )
+
+
+def test_no_key_gets_401_even_with_a_bad_body(api: ApiClient) -> None:
+    assert_problem(api.client.post("/v1/cases", json={"nonsense": True}), 401)
+
+
+def test_unknown_case_is_404(api: ApiClient) -> None:
+    assert_problem(api.client.get("/v1/cases/nope", headers=api.headers("auditor")), 404)
+
+
+def test_same_notification_gives_the_same_answer_bit_for_bit(api: ApiClient) -> None:
+    h = api.headers("submitter")
+    a = api.client.post("/v1/cases", json=example("acceleration"), headers=h).json()
+    b = api.client.post("/v1/cases", json=example("acceleration"), headers=h).json()
+    for volatile in ("case_id", "event_id", "received_at", "timings_ms"):
+        a.pop(volatile)
+        b.pop(volatile)
+    assert a == b

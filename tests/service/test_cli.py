@@ -1,0 +1,155 @@
+"""The `aacn-triage` command line, in process and as the installed console script."""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import socket
+import subprocess
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import httpx2 as httpx
+import pytest
+
+from service import cli
+from service.settings import get_settings
+from tests.support import example, summary
+
+
+@pytest.fixture
+def env_db(monkeypatch: pytest.MonkeyPatch, sqlite_url: str) -> Iterator[str]:
+    monkeypatch.setenv("AACN_DATABASE_URL", sqlite_url)
+    get_settings.cache_clear()
+    yield sqlite_url
+    get_settings.cache_clear()
+
+
+def test_keys_create_prints_the_key_once_and_stores_only_a_hash(
+    env_db: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    assert cli.main(["keys", "create", "--role", "submitter", "--name", "center-a"]) == 0
+    key = capsys.readouterr().out.strip()
+    assert key.startswith("aacn_")
+    assert len(key) > 40
+    assert cli.main(["keys", "list"]) == 0
+    listing = capsys.readouterr().out
+    assert "center-a\tsubmitter" in listing
+    assert key not in listing
+    db_bytes = Path(env_db.removeprefix("sqlite:///")).read_bytes()
+    assert key.encode() not in db_bytes
+    assert cli.main(["keys", "create", "--role", "auditor", "--name", "center-a"]) == 1
+
+
+def test_db_upgrade_downgrade_current(env_db: str, capsys: pytest.CaptureFixture[str]) -> None:
+    assert cli.main(["db", "upgrade"]) == 0
+    assert "revision 0001" in capsys.readouterr().out
+    assert cli.main(["db", "downgrade", "base"]) == 0
+    assert "revision base" in capsys.readouterr().out
+
+
+def test_triage_one_file(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    src = tmp_path / "n.json"
+    src.write_text(json.dumps(example("delta_v")))
+    assert cli.main(["triage", str(src)]) == 0
+    result = json.loads(capsys.readouterr().out)
+    assert result["case_id"] is None
+    assert len(result["occupants"]) == 2
+    assert {o["impact_mode"] for o in result["occupants"]} == {"near_side", "far_side"}
+
+
+def test_triage_refuses_a_bad_file_with_the_field(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    body = summary()
+    body["crash"]["pulse"]["delta_v_kmh"] = 999
+    src = tmp_path / "bad.json"
+    src.write_text(json.dumps(body))
+    assert cli.main(["triage", str(src)]) == 1
+    assert "crash.pulse.delta_v_kmh" in capsys.readouterr().err
+
+
+def test_batch_writes_one_line_per_input_and_resumes(tmp_path: Path) -> None:
+    bodies = [summary(dv) for dv in (15, 30, 45, 60)]
+    bad = summary()
+    bad["occupants"] = []
+    lines = (
+        [json.dumps(b) for b in bodies[:2]]
+        + [json.dumps(bad)]
+        + [json.dumps(b) for b in bodies[2:]]
+    )
+    src, out = tmp_path / "in.jsonl", tmp_path / "out.jsonl"
+    src.write_text("\n".join(lines) + "\n")
+    assert cli.main(["triage", "--batch", str(src), "--out", str(out)]) == 0
+    full = [json.loads(x) for x in out.read_text().splitlines()]
+    assert [r["line"] for r in full] == [1, 2, 3, 4, 5]
+    assert "error" in full[2]
+    assert full[2]["error"]["errors"][0]["field"] == "occupants"
+    assert all("result" in r for i, r in enumerate(full) if i != 2)
+
+    # interrupted after two lines and a torn third: --resume redoes only the rest
+    kept = out.read_text().splitlines()[:2]
+    out.write_text("\n".join(kept) + '\n{"line": 3, "resu')
+    assert cli.main(["triage", "--batch", str(src), "--out", str(out), "--resume"]) == 0
+    resumed = [json.loads(x) for x in out.read_text().splitlines()]
+    assert [r["line"] for r in resumed] == [1, 2, 3, 4, 5]
+    assert resumed[:2] == full[:2], "kept lines are untouched"
+    strip = ("received_at", "timings_ms")
+    for a, b in zip(resumed, full, strict=True):
+        if "result" in a:
+            for k in strip:
+                a["result"].pop(k)
+                b["result"].pop(k)
+        assert a == b
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+def test_console_script_serves_real_http(tmp_path: Path) -> None:
+    exe = shutil.which("aacn-triage")
+    if exe is None:
+        pytest.skip("the console script is not installed (pip install -e .)")
+    env = {**os.environ, "AACN_DATABASE_URL": f"sqlite:///{tmp_path / 'served.db'}"}
+    key = subprocess.run(
+        [exe, "keys", "create", "--role", "admin", "--name", "ops"],
+        env=env,
+        capture_output=True,
+        text=True,
+        check=True,
+        timeout=120,
+    ).stdout.strip()
+    port = _free_port()
+    log = tmp_path / "server.log"
+    with log.open("w") as sink:
+        server = subprocess.Popen(
+            [exe, "serve", "--port", str(port)], env=env, stdout=sink, stderr=subprocess.STDOUT
+        )
+    try:
+        base = f"http://127.0.0.1:{port}"
+        for _ in range(600):  # up to 60 s for a cold start on a busy machine
+            try:
+                if httpx.get(base + "/readyz", timeout=1.0).status_code == 200:
+                    break
+            except httpx.TransportError:
+                pass
+            if server.poll() is not None:
+                pytest.fail(f"server exited: {log.read_text()}")
+            time.sleep(0.1)
+        else:
+            pytest.fail(f"server never became ready: {log.read_text()}")
+        h = {"Authorization": f"Bearer {key}"}
+        body = example("summary")
+        created = httpx.post(base + "/v1/cases", json=body, headers=h, timeout=30)
+        assert created.status_code == 201, created.text
+        got = httpx.get(base + created.headers["location"], headers=h, timeout=30)
+        assert got.json()["result"] == created.json()
+        assert httpx.post(base + "/v1/cases", json=body, timeout=30).status_code == 401
+    finally:
+        server.terminate()
+        server.wait(timeout=30)

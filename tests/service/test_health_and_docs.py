@@ -1,0 +1,72 @@
+"""/livez, /readyz, /metrics and the OpenAPI document."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from fastapi.testclient import TestClient
+from openapi_spec_validator import validate
+
+from service.app import create_app
+from service.schemas import EXAMPLE_NOTIFICATIONS
+from service.settings import Settings
+from tests.support import ApiClient, assert_problem, summary
+
+
+def test_livez_and_readyz(api: ApiClient) -> None:
+    assert api.client.get("/livez").json() == {"status": "ok"}
+    ready = api.client.get("/readyz")
+    assert ready.status_code == 200
+    assert ready.json()["models"]["baseline"]["sha256"]
+
+
+def test_readyz_is_503_when_the_database_is_unreachable() -> None:
+    # a closed loopback port: nothing listens there
+    settings = Settings(
+        database_url="postgresql+psycopg://nobody@127.0.0.1:9/none?connect_timeout=2",
+        auto_migrate=False,
+    )
+    with TestClient(create_app(settings)) as client:
+        assert client.get("/livez").status_code == 200, "liveness checks no dependency"
+        problem = assert_problem(client.get("/readyz"), 503)
+        assert "database unreachable" in problem["detail"]
+
+
+def test_metrics_count_requests_decisions_and_engine_time(api: ApiClient) -> None:
+    h = api.headers("submitter")
+    api.client.post("/v1/cases", json=summary(70, belted=False, airbag="absent"), headers=h)
+    api.client.post("/v1/cases", json=summary(10), headers=h)
+    api.client.post("/v1/cases", json={"bad": 1}, headers=h)
+    text = api.client.get("/metrics").text
+    assert 'aacn_http_requests_total{handler="/v1/cases",method="POST",status="2xx"} 2.0' in text
+    assert 'aacn_http_requests_total{handler="/v1/cases",method="POST",status="4xx"} 1.0' in text
+    assert 'aacn_triage_decisions_total{decision="iss15_plus",method="baseline"} 1.0' in text
+    assert 'aacn_triage_decisions_total{decision="not_iss15_plus",method="baseline"} 1.0' in text
+    assert "aacn_engine_seconds_count 2.0" in text
+    assert "/livez" not in text
+
+
+def _walk_properties(schema: dict[str, Any], name: str, missing: list[str]) -> None:
+    for prop, sub in schema.get("properties", {}).items():
+        if "description" not in sub and "$ref" not in sub:
+            missing.append(f"{name}.{prop}")
+
+
+def test_openapi_document_validates_with_descriptions_and_examples(api: ApiClient) -> None:
+    doc = api.client.get("/openapi.json").json()
+    validate(doc)
+    schemas = doc["components"]["schemas"]
+    missing: list[str] = []
+    for name, schema in schemas.items():
+        if name in ("ValidationError", "HTTPValidationError"):
+            continue
+        assert schema.get("description"), f"schema {name} has no description"
+        _walk_properties(schema, name, missing)
+    assert not missing, f"fields without description: {missing}"
+    post = doc["paths"]["/v1/cases"]["post"]
+    examples = post["requestBody"]["content"]["application/json"]["examples"]
+    assert set(examples) == set(EXAMPLE_NOTIFICATIONS)
+    kinds = {e["value"]["crash"]["pulse"]["kind"] for e in examples.values()}
+    assert kinds == {"acceleration", "delta_v", "summary"}
+    assert "bearer" in str(doc["components"]["securitySchemes"]).lower()
+    assert "application/problem+json" in post["responses"]["422"]["content"]

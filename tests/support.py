@@ -1,0 +1,60 @@
+"""Test support: the API client bundle, notification builders, problem checks."""
+
+from __future__ import annotations
+
+import copy
+import uuid
+from dataclasses import dataclass
+from typing import Any
+
+from fastapi.testclient import TestClient
+
+from service.schemas import EXAMPLE_NOTIFICATIONS
+from service.settings import Settings
+
+
+@dataclass
+class ApiClient:
+    """A TestClient plus one key per role."""
+
+    client: TestClient
+    keys: dict[str, str]
+    settings: Settings
+
+    def headers(self, role: str) -> dict[str, str]:
+        return {"Authorization": f"Bearer {self.keys[role]}"}
+
+
+def example(kind: str, *, event_id: str | None = None) -> dict[str, Any]:
+    """A deep copy of a documented example with a fresh event_id."""
+    body = copy.deepcopy(EXAMPLE_NOTIFICATIONS[kind]["value"])
+    body["event_id"] = event_id or f"test-{uuid.uuid4().hex}"
+    return body
+
+
+def summary(
+    delta_v_kmh: float = 56.0,
+    pdof_deg: float = 0.0,
+    *,
+    belted: bool = True,
+    airbag: str = "deployed",
+    seat: str = "driver",
+    event_id: str | None = None,
+) -> dict[str, Any]:
+    """A one-occupant summary-pulse notification."""
+    body = example("summary", event_id=event_id)
+    body["crash"]["pulse"] = {"kind": "summary", "delta_v_kmh": delta_v_kmh, "pdof_deg": pdof_deg}
+    occ = body["occupants"][0]
+    occ.update(seat=seat, belted=belted, frontal_airbag=airbag)
+    return body
+
+
+def assert_problem(response: Any, status: int) -> dict[str, Any]:
+    """The response is an RFC 9457 problem with `status`; returns its body."""
+    assert response.status_code == status, response.text
+    assert response.headers["content-type"].startswith("application/problem+json")
+    body: dict[str, Any] = response.json()
+    for member in ("type", "title", "status", "detail"):
+        assert member in body, f"problem lacks {member}: {body}"
+    assert body["status"] == status
+    return body
