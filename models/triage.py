@@ -2,9 +2,12 @@
 
 Flow per notification: the pulse is processed once (`models.pulse`); per
 occupant the impact mode is classified (`models.impact_mode`); occupants inside
-an occupant model's coverage are answered by that model when one is loaded,
-all others by the statistical baseline (`models.baseline`), which is also kept
-for every occupant as a second opinion. The case-level decision is the worst
+an occupant model's coverage are simulated by that model (`models.lpm`), whose
+injury measures give region AIS, ISS and P(ISS >= 15) (`models.injury`); the
+95% intervals come from the PCE surrogates (`models.surrogate`) when loaded,
+else from direct runs over the sensor-uncertainty box. All other occupants are
+answered by the statistical baseline (`models.baseline`), which is also kept for
+every occupant as a second opinion. The case-level decision is the worst
 occupant's.
 
 Everything here is a pure function of the notification and the loaded models:
@@ -14,28 +17,40 @@ the same inputs and model versions give the same result, bit for bit (only
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from typing import Protocol
 
 from models import ENGINE_VERSION
 from models.baseline.logistic import BaselineFeatures, BaselineModel, load_default
-from models.impact_mode import ImpactClassification, classify_impact
+from models.impact_mode import ImpactClassification, ImpactMode, classify_impact
+from models.injury.assessment import InjuryMeasures
+from models.lpm.domain import POSTURE_RANGE_DEG, SEAT_TRACK_RANGE_MM, clamp
+from models.lpm.fingerprint import lpm_code_sha256
+from models.lpm.params import ParameterSet, available_parameter_sets, load_parameter_set
+from models.lpm.simulate import LpmResult, simulate, warm_up
 from models.notification import AirbagState, Body, CrashNotification, Occupant, Seat
 from models.pulse import ProcessedPulse, process_pulse
 
 __all__ = [
+    "DEFAULT_POSTURE_SD_DEG",
+    "DEFAULT_SEAT_TRACK_SD_MM",
+    "LPM_THRESHOLDS",
     "RECOMMENDATION_NO_TRAUMA_INDICATION",
     "RECOMMENDATION_TRAUMA_CENTER",
     "EngineModels",
     "IssEstimate",
     "ModelInfo",
+    "OccupantSimulation",
     "OccupantTriage",
     "TriageDecision",
     "TriageResult",
     "UnknownVehicleModel",
     "decide",
     "load_engine_models",
+    "simulate_notification",
     "triage",
 ]
 
@@ -50,6 +65,61 @@ RECOMMENDATION_NO_TRAUMA_INDICATION = (
     "No telemetry indication of ISS 15 or more: destination by EMS field assessment "
     "under local protocol."
 )
+
+
+#: Decision thresholds on the occupant models' P(ISS >= 15), per mode. Bahouth,
+#: Digges & Schulman recommend 0.10 for frontal and 0.05 for side crashes (sensitivity
+#: > 0.67, PPV about 0.20; crash-data-and-triage.md section 1) [V]; rear takes the
+#: frontal value [R]. The CDC 2008 panel's 20% is a vehicle-level rule for
+#: statistical models and misses many seriously injured (Bahouth 2014).
+LPM_THRESHOLDS: Mapping[ImpactMode, float] = {
+    ImpactMode.FRONTAL: 0.10,
+    ImpactMode.REAR: 0.10,
+    ImpactMode.NEAR_SIDE: 0.05,
+    ImpactMode.FAR_SIDE: 0.05,
+}
+#: Default sensor standard deviations: posture within 5 deg and seat position within
+#: 5 cm, 95% of the time, Gaussian (issue 5): SD = bound / 1.96.
+DEFAULT_POSTURE_SD_DEG = 5.0 / 1.959964
+DEFAULT_SEAT_TRACK_SD_MM = 50.0 / 1.959964
+#: z of a two-sided 95% interval.
+_Z95 = 1.959964
+
+
+class UncertaintyLike(Protocol):
+    """What a surrogate propagation returns (models.surrogate.evaluate.UncertaintyResult)."""
+
+    p_iss15: float
+    p_iss15_ci95: tuple[float, float]
+    iss: float
+    iss_ci95: tuple[float, float]
+    measures: Mapping[str, float]
+    measures_ci95: Mapping[str, tuple[float, float]]
+
+
+class SurrogateFamilyLike(Protocol):
+    def propagate(
+        self,
+        *,
+        delta_v_kmh: float,
+        angle_deg: float,
+        posture_deg: float,
+        seat_track_mm: float,
+        duration_ms: float,
+        posture_sd_deg: float,
+        seat_track_sd_mm: float,
+    ) -> UncertaintyLike: ...
+
+
+class SurrogateLibraryLike(Protocol):
+    """What the orchestrator needs of the surrogate library (models.surrogate.evaluate)."""
+
+    version: str
+    sha256: str
+
+    def family(
+        self, mode: ImpactMode, body: Body, belted: bool, airbag_deployed: bool
+    ) -> SurrogateFamilyLike: ...
 
 
 class UnknownVehicleModel(ValueError):
@@ -97,6 +167,9 @@ class OccupantTriage:
     iss: IssEstimate | None = None
     region_ais: Mapping[str, int] | None = None
     measures: Mapping[str, float] | None = None
+    measures_ci95: Mapping[str, tuple[float, float]] | None = None
+    interval_method: str = "coefficient_covariance"
+    point_outside_interval: bool = False
 
 
 @dataclass(frozen=True)
@@ -121,31 +194,82 @@ class EngineModels:
     ----------
     baseline : BaselineModel
         The statistical baseline (always present).
-    vehicle_models : frozenset of str
-        Vehicle parameter-set names a notification may name.
+    parameter_sets : Mapping[str, ParameterSet]
+        Occupant-model parameter sets by vehicle model name.
+    surrogates : SurrogateLibraryLike or None
+        PCE surrogates for the confidence intervals; None: the interim interval
+        from direct occupant-model runs over the sensor-uncertainty box.
     threshold_override : float or None
         Replaces every model's own decision threshold when set.
+    posture_sd_deg, seat_track_sd_mm : float
+        Sensor standard deviations used when a notification gives none.
     """
 
     baseline: BaselineModel
-    vehicle_models: frozenset[str] = frozenset({"compact_sedan"})
+    parameter_sets: Mapping[str, ParameterSet]
+    surrogates: SurrogateLibraryLike | None = None
     threshold_override: float | None = None
+    posture_sd_deg: float = DEFAULT_POSTURE_SD_DEG
+    seat_track_sd_mm: float = DEFAULT_SEAT_TRACK_SD_MM
 
-    def model_infos(self) -> dict[str, ModelInfo]:
-        """The versions and checksums of the loaded models."""
+    @property
+    def vehicle_models(self) -> frozenset[str]:
+        """Vehicle parameter-set names a notification may name."""
+        return frozenset(self.parameter_sets)
+
+    def model_infos(self, vehicle_model: str | None = None) -> dict[str, ModelInfo]:
+        """Versions and checksums: the baseline, and the occupant models of `vehicle_model`.
+
+        With `vehicle_model` None, every loaded model.
+        """
         b = self.baseline
-        return {"baseline": ModelInfo(name=b.name, version=b.version, sha256=b.sha256)}
+        infos = {"baseline": ModelInfo(name=b.name, version=b.version, sha256=b.sha256)}
+        names = sorted(self.parameter_sets) if vehicle_model is None else [vehicle_model]
+        for name in names:
+            ps = self.parameter_sets[name]
+            infos[f"lpm_parameters:{name}"] = ModelInfo(
+                name=ps.name, version=name, sha256=ps.sha256
+            )
+        infos["lpm_code"] = ModelInfo(
+            name="occupant LPMs and injury criteria",
+            version=ENGINE_VERSION,
+            sha256=lpm_code_sha256(),
+        )
+        if self.surrogates is not None:
+            infos["surrogates"] = ModelInfo(
+                name="pce_surrogates",
+                version=self.surrogates.version,
+                sha256=self.surrogates.sha256,
+            )
+        return infos
 
 
-def load_engine_models(threshold_override: float | None = None) -> EngineModels:
-    """Load and verify the shipped model artifacts.
+def load_engine_models(
+    threshold_override: float | None = None,
+    *,
+    posture_sd_deg: float = DEFAULT_POSTURE_SD_DEG,
+    seat_track_sd_mm: float = DEFAULT_SEAT_TRACK_SD_MM,
+    surrogates: SurrogateLibraryLike | None = None,
+    warm: bool = True,
+) -> EngineModels:
+    """Load and verify the shipped model artifacts, and warm the compiled kernels.
 
     Raises
     ------
     ValueError
         When an artifact is missing or malformed.
     """
-    return EngineModels(baseline=load_default(), threshold_override=threshold_override)
+    parameter_sets = {name: load_parameter_set(name) for name in available_parameter_sets()}
+    if warm:
+        warm_up()
+    return EngineModels(
+        baseline=load_default(),
+        parameter_sets=parameter_sets,
+        surrogates=surrogates,
+        threshold_override=threshold_override,
+        posture_sd_deg=posture_sd_deg,
+        seat_track_sd_mm=seat_track_sd_mm,
+    )
 
 
 def decide(probability: float, ci95: tuple[float, float], threshold: float) -> TriageDecision:
@@ -187,6 +311,178 @@ def _worst(decisions: list[TriageDecision]) -> TriageDecision:
     return max(decisions, key=lambda d: (d.iss15_plus, d.probability))
 
 
+def _used_models(models: EngineModels, vehicle_model: str, used_lpm: bool) -> dict[str, ModelInfo]:
+    infos = models.model_infos(vehicle_model)
+    if not used_lpm:
+        return {"baseline": infos["baseline"]}
+    return infos
+
+
+def _in_domain(occupant: Occupant, index: int, assumptions: list[str]) -> Occupant:
+    """The occupant with posture and seat track clamped to the models' domain."""
+    posture = clamp(occupant.posture_lumbar_flexion_deg, POSTURE_RANGE_DEG)
+    track = clamp(occupant.seat_track_mm, SEAT_TRACK_RANGE_MM)
+    if posture != occupant.posture_lumbar_flexion_deg:
+        assumptions.append(
+            f"occupants[{index}]: lumbar flexion {occupant.posture_lumbar_flexion_deg:g} deg "
+            f"clamped to {posture:g} deg (occupant-model range {POSTURE_RANGE_DEG})"
+        )
+    if track != occupant.seat_track_mm:
+        assumptions.append(
+            f"occupants[{index}]: seat track {occupant.seat_track_mm:g} mm clamped to "
+            f"{track:g} mm (occupant-model range {SEAT_TRACK_RANGE_MM})"
+        )
+    return dataclasses.replace(occupant, posture_lumbar_flexion_deg=posture, seat_track_mm=track)
+
+
+def _measures_dict(measures: InjuryMeasures) -> dict[str, float]:
+    return {k: float(v) for k, v in dataclasses.asdict(measures).items() if v is not None}
+
+
+def _run(
+    pulse: ProcessedPulse,
+    impact: ImpactClassification,
+    occupant: Occupant,
+    params: ParameterSet,
+) -> LpmResult:
+    return simulate(
+        pulse.time_s,
+        pulse.longitudinal_g,
+        pulse.lateral_g,
+        impact.mode,
+        occupant,
+        params,
+        angle_deg=impact.angle_from_axis_deg,
+    )
+
+
+def _sensor_box(
+    pulse: ProcessedPulse,
+    impact: ImpactClassification,
+    occupant: Occupant,
+    params: ParameterSet,
+    posture_sd: float,
+    track_sd: float,
+) -> list[LpmResult]:
+    """Direct runs at the 8 non-central points of the +/-1.96 SD sensor box.
+
+    The interim interval when no surrogate is loaded: the range of each output over
+    posture and seat track within their 95% sensor bounds (clamped to the domain).
+    """
+    runs = []
+    for dp in (-_Z95, 0.0, _Z95):
+        for dt in (-_Z95, 0.0, _Z95):
+            if dp == 0.0 and dt == 0.0:
+                continue
+            shifted = dataclasses.replace(
+                occupant,
+                posture_lumbar_flexion_deg=clamp(
+                    occupant.posture_lumbar_flexion_deg + dp * posture_sd, POSTURE_RANGE_DEG
+                ),
+                seat_track_mm=clamp(occupant.seat_track_mm + dt * track_sd, SEAT_TRACK_RANGE_MM),
+            )
+            result = _run(pulse, impact, shifted, params)
+            if result.assessment is not None:
+                runs.append(result)
+    return runs
+
+
+def _lpm_occupant(
+    index: int,
+    occupant: Occupant,
+    impact: ImpactClassification,
+    pulse: ProcessedPulse,
+    params: ParameterSet,
+    models: EngineModels,
+    baseline: TriageDecision,
+    assumptions: list[str],
+) -> OccupantTriage | None:
+    """Answer one in-coverage occupant with its occupant model; None to fall back."""
+    lpm_occupant = _in_domain(occupant, index, assumptions)
+    nominal = _run(pulse, impact, lpm_occupant, params)
+    if nominal.assessment is None:
+        assumptions.append(
+            f"occupants[{index}]: occupant model failed ({nominal.message}); "
+            "statistical baseline used"
+        )
+        return None
+    posture_sd = occupant.posture_sd_deg or models.posture_sd_deg
+    track_sd = occupant.seat_track_sd_mm or models.seat_track_sd_mm
+    p = float(nominal.assessment.p_iss15)
+    iss = int(nominal.assessment.iss)
+    measures = _measures_dict(nominal.measures)
+    uncertainty = None
+    if models.surrogates is not None:
+        try:
+            family = models.surrogates.family(
+                impact.mode,
+                occupant.body,
+                occupant.belted,
+                occupant.frontal_airbag is AirbagState.DEPLOYED,
+            )
+            uncertainty = family.propagate(
+                delta_v_kmh=pulse.delta_v_kmh,
+                angle_deg=impact.angle_from_axis_deg,
+                posture_deg=lpm_occupant.posture_lumbar_flexion_deg,
+                seat_track_mm=lpm_occupant.seat_track_mm,
+                duration_ms=pulse.haversine.duration_ms,
+                posture_sd_deg=posture_sd,
+                seat_track_sd_mm=track_sd,
+            )
+        except (KeyError, ValueError) as exc:
+            assumptions.append(
+                f"occupants[{index}]: surrogate unavailable ({exc}); interval from direct "
+                "occupant-model runs over the sensor-uncertainty box"
+            )
+    if uncertainty is not None:
+        p_ci = (float(uncertainty.p_iss15_ci95[0]), float(uncertainty.p_iss15_ci95[1]))
+        iss_ci = (float(uncertainty.iss_ci95[0]), float(uncertainty.iss_ci95[1]))
+        measures_ci = {
+            k: (float(v[0]), float(v[1]))
+            for k, v in uncertainty.measures_ci95.items()
+            if k in measures
+        }
+        method = "pce_bootstrap"
+        outside = not (p_ci[0] <= p <= p_ci[1]) or not (iss_ci[0] <= iss <= iss_ci[1])
+        if outside:
+            assumptions.append(
+                f"occupants[{index}]: the direct occupant-model estimate lies outside the "
+                "surrogate's 95% interval"
+            )
+    else:
+        box = [nominal, *_sensor_box(pulse, impact, lpm_occupant, params, posture_sd, track_sd)]
+        ps = [float(r.assessment.p_iss15) for r in box if r.assessment is not None]
+        isss = [float(r.assessment.iss) for r in box if r.assessment is not None]
+        p_ci = (min(ps), max(ps))
+        iss_ci = (min(isss), max(isss))
+        measures_ci = {}
+        for key in measures:
+            values = [_measures_dict(r.measures).get(key) for r in box]
+            finite = [v for v in values if v is not None]
+            measures_ci[key] = (min(finite), max(finite))
+        method = "lpm_sensor_box"
+        outside = False
+    threshold = (
+        models.threshold_override
+        if models.threshold_override is not None
+        else LPM_THRESHOLDS[impact.mode]
+    )
+    return OccupantTriage(
+        seat=occupant.seat,
+        body=occupant.body,
+        impact=impact,
+        method="lpm",
+        triage=decide(p, p_ci, threshold),
+        baseline=baseline,
+        iss=IssEstimate(estimate=iss, ci95=iss_ci),
+        region_ais=dict(nominal.assessment.region_ais),
+        measures=measures,
+        measures_ci95=measures_ci,
+        interval_method=method,
+        point_outside_interval=outside,
+    )
+
+
 def triage(notification: CrashNotification, models: EngineModels) -> TriageResult:
     """Triage every occupant of a notification.
 
@@ -226,16 +522,25 @@ def triage(notification: CrashNotification, models: EngineModels) -> TriageResul
         )
 
     occupants: list[OccupantTriage] = []
+    used_lpm = False
     for i, occupant in enumerate(notification.occupants):
         impact = classify_impact(pulse.pdof_deg, occupant.seat, notification.drive_side)
         baseline = _baseline_decision(models, occupant, pulse, impact)
+        answer: OccupantTriage | None = None
         if impact.in_lpm_coverage:
+            params = models.parameter_sets[notification.vehicle_model]
+            answer = _lpm_occupant(
+                i, occupant, impact, pulse, params, models, baseline, assumptions
+            )
+            used_lpm = used_lpm or answer is not None
+        else:
             assumptions.append(
-                f"occupants[{i}]: {impact.mode.value} occupant model not yet available; "
-                "statistical baseline used"
+                f"occupants[{i}]: PDOF {impact.pdof_deg:.0f} deg is outside every occupant "
+                "model's coverage; statistical baseline used"
             )
         occupants.append(
-            OccupantTriage(
+            answer
+            or OccupantTriage(
                 seat=occupant.seat,
                 body=occupant.body,
                 impact=impact,
@@ -253,10 +558,47 @@ def triage(notification: CrashNotification, models: EngineModels) -> TriageResul
         pulse=pulse,
         assumptions=tuple(assumptions),
         engine_version=ENGINE_VERSION,
-        models=models.model_infos(),
+        models=_used_models(models, notification.vehicle_model, used_lpm),
         timings_ms={
             "pulse": 1000.0 * (t1 - t0),
             "occupants": 1000.0 * (t2 - t1),
             "engine_total": 1000.0 * (t2 - t0),
         },
     )
+
+
+@dataclass(frozen=True)
+class OccupantSimulation:
+    """One occupant's direct occupant-model run (None where out of coverage)."""
+
+    index: int
+    occupant: Occupant
+    impact: ImpactClassification
+    result: LpmResult | None
+
+
+def simulate_notification(
+    notification: CrashNotification, models: EngineModels
+) -> tuple[ProcessedPulse, list[OccupantSimulation], list[str]]:
+    """Run the occupant models of a notification, keeping the full time histories.
+
+    Returns
+    -------
+    pulse : ProcessedPulse
+    simulations : list of OccupantSimulation
+        One per occupant, in order.
+    assumptions : list of str
+    """
+    if notification.vehicle_model not in models.vehicle_models:
+        raise UnknownVehicleModel(f"unknown vehicle model {notification.vehicle_model!r}")
+    pulse = process_pulse(notification.pulse)
+    params = models.parameter_sets[notification.vehicle_model]
+    assumptions: list[str] = []
+    out = []
+    for i, occupant in enumerate(notification.occupants):
+        impact = classify_impact(pulse.pdof_deg, occupant.seat, notification.drive_side)
+        result = None
+        if impact.in_lpm_coverage:
+            result = _run(pulse, impact, _in_domain(occupant, i, assumptions), params)
+        out.append(OccupantSimulation(i, occupant, impact, result))
+    return pulse, out, assumptions

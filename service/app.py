@@ -98,7 +98,11 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         models = None
         error = None
         try:
-            models = load_engine_models(threshold_override=settings.triage_threshold)
+            models = load_engine_models(
+                threshold_override=settings.triage_threshold,
+                posture_sd_deg=settings.posture_sd_deg,
+                seat_track_sd_mm=settings.seat_track_sd_mm,
+            )
         except Exception as exc:  # reported by /readyz, the service stays alive
             error = f"{type(exc).__name__}: {exc}"
             log.error("models failed to load: %s", error)

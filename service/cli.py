@@ -8,6 +8,7 @@ Commands::
     aacn-triage keys list
     aacn-triage triage FILE.json
     aacn-triage triage --batch IN.jsonl --out OUT.jsonl [--resume]
+    aacn-triage simulate FILE.json [--plot OUT.png]
     aacn-triage baseline fit [--data CSV] [--out JSON]
 """
 
@@ -205,6 +206,72 @@ def _run_batch(src: Path, out: Path, models: Any, *, resume: bool) -> int:
     return 0
 
 
+def _cmd_simulate(args: argparse.Namespace) -> int:
+    """Run the occupant models of one notification; print the measures, draw the plot."""
+    import dataclasses
+
+    from models.lpm.plot import plot_simulation
+    from models.triage import UnknownVehicleModel, load_engine_models, simulate_notification
+    from service.schemas import CrashNotificationIn
+
+    _settings()
+    try:
+        notification = CrashNotificationIn.model_validate_json(
+            Path(args.file).read_text(encoding="utf-8")
+        )
+    except ValidationError as exc:
+        _print(json.dumps(_problem_from_validation(exc), indent=2), err=True)
+        return 1
+    engine_input, notes = notification.to_engine()
+    models = load_engine_models()
+    try:
+        pulse, simulations, assumptions = simulate_notification(engine_input, models)
+    except (UnknownVehicleModel, ValueError) as exc:
+        _print(f"error: {exc}", err=True)
+        return 1
+    report: dict[str, Any] = {
+        "event_id": engine_input.event_id,
+        "delta_v_kmh": pulse.delta_v_kmh,
+        "pdof_deg": pulse.pdof_deg,
+        "assumptions": [*notes, *assumptions],
+        "occupants": [],
+    }
+    plots = []
+    for sim in simulations:
+        entry: dict[str, Any] = {
+            "seat": sim.occupant.seat.value,
+            "impact_mode": sim.impact.mode.value,
+            "in_lpm_coverage": sim.impact.in_lpm_coverage,
+        }
+        if sim.result is not None:
+            r = sim.result
+            entry["status"] = r.status
+            entry["message"] = r.message
+            entry["measures"] = {
+                k: v for k, v in dataclasses.asdict(r.measures).items() if v is not None
+            }
+            if r.assessment is not None:
+                entry["region_ais"] = dict(r.assessment.region_ais)
+                entry["iss"] = r.assessment.iss
+                entry["p_iss15"] = r.assessment.p_iss15
+            if args.plot:
+                out = Path(args.plot)
+                if len(simulations) > 1:
+                    out = out.with_name(f"{out.stem}-{sim.occupant.seat.value}{out.suffix}")
+                plot_simulation(
+                    r,
+                    out,
+                    body=sim.occupant.body,
+                    title=f"{engine_input.event_id}: {sim.occupant.seat.value}, "
+                    f"{sim.impact.mode.value}, {pulse.delta_v_kmh:.0f} km/h",
+                )
+                plots.append(str(out))
+        report["occupants"].append(entry)
+    report["plots"] = plots
+    _print(json.dumps(report, indent=2))
+    return 0
+
+
 def _cmd_baseline(args: argparse.Namespace) -> int:
     from models.baseline.fit import main as fit_main
 
@@ -255,6 +322,11 @@ def build_parser() -> argparse.ArgumentParser:
     tri.add_argument("--out", help="JSON Lines output (with --batch)")
     tri.add_argument("--resume", action="store_true", help="keep OUT's lines and continue")
     tri.set_defaults(func=_cmd_triage)
+
+    sim = sub.add_parser("simulate", help="run the occupant models of one notification")
+    sim.add_argument("file", help="one notification (JSON)")
+    sim.add_argument("--plot", help="draw pulse, motion and measures to this image (PNG)")
+    sim.set_defaults(func=_cmd_simulate)
 
     base = sub.add_parser("baseline", help="statistical baseline")
     base_sub = base.add_subparsers(dest="baseline_command", required=True)

@@ -39,6 +39,9 @@ def _occupant_out(o: OccupantTriage) -> OccupantOut:
         iss=IssOut(estimate=o.iss.estimate, ci95=o.iss.ci95) if o.iss is not None else None,
         region_ais=dict(o.region_ais) if o.region_ais is not None else None,
         measures=dict(o.measures) if o.measures is not None else None,
+        measures_ci95=dict(o.measures_ci95) if o.measures_ci95 is not None else None,
+        interval_method=o.interval_method,
+        point_outside_interval=o.point_outside_interval,
         triage=_triage_out(o.triage),
         baseline=_triage_out(o.baseline),
     )

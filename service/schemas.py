@@ -547,7 +547,22 @@ class OccupantOut(OutModel):
         default=None, description="AIS per ISS body region, where the engine provides it."
     )
     measures: dict[str, float] | None = Field(
-        default=None, description="Injury measures (HIC15, Nij, ...), where computed."
+        default=None,
+        description="Injury measures from the direct occupant-model run, where computed: "
+        "hic15, nij, chest_deflection_mm, chest_vc_m_s, chest_a3ms_g, chest_cti, "
+        "abdomen_vc_m_s.",
+    )
+    measures_ci95: dict[str, tuple[float, float]] | None = Field(
+        default=None, description="95% interval of each measure under sensor uncertainty."
+    )
+    interval_method: str = Field(
+        description="Where the 95% intervals come from: `pce_bootstrap` (surrogates, "
+        "bootstrap replicates), `lpm_sensor_box` (direct runs over the +/-1.96 SD sensor "
+        "box), or `coefficient_covariance` (the baseline's coefficients)."
+    )
+    point_outside_interval: bool = Field(
+        default=False,
+        description="The direct occupant-model estimate lies outside the surrogate interval.",
     )
     triage: TriageOut
     baseline: TriageOut = Field(

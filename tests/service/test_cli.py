@@ -153,3 +153,18 @@ def test_console_script_serves_real_http(tmp_path: Path) -> None:
     finally:
         server.terminate()
         server.wait(timeout=30)
+
+
+def test_simulate_prints_measures_and_draws_a_plot(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    src = tmp_path / "n.json"
+    src.write_text(json.dumps(example("delta_v")))
+    plot = tmp_path / "sim.png"
+    assert cli.main(["simulate", str(src), "--plot", str(plot)]) == 0
+    report = json.loads(capsys.readouterr().out)
+    assert [o["impact_mode"] for o in report["occupants"]] == ["near_side", "far_side"]
+    for occupant, path in zip(report["occupants"], report["plots"], strict=True):
+        assert occupant["measures"]["hic15"] > 0
+        assert 0 <= occupant["iss"] <= 75
+        assert Path(path).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"

@@ -36,13 +36,15 @@ def test_metrics_count_requests_decisions_and_engine_time(api: ApiClient) -> Non
     h = api.headers("submitter")
     api.client.post("/v1/cases", json=summary(70, belted=False, airbag="absent"), headers=h)
     api.client.post("/v1/cases", json=summary(10), headers=h)
+    api.client.post("/v1/cases", json=summary(10, 45.0), headers=h)  # outside LPM coverage
     api.client.post("/v1/cases", json={"bad": 1}, headers=h)
     text = api.client.get("/metrics").text
-    assert 'aacn_http_requests_total{handler="/v1/cases",method="POST",status="2xx"} 2.0' in text
+    assert 'aacn_http_requests_total{handler="/v1/cases",method="POST",status="2xx"} 3.0' in text
     assert 'aacn_http_requests_total{handler="/v1/cases",method="POST",status="4xx"} 1.0' in text
-    assert 'aacn_triage_decisions_total{decision="iss15_plus",method="baseline"} 1.0' in text
+    assert 'aacn_triage_decisions_total{decision="iss15_plus",method="lpm"} 1.0' in text
+    assert 'aacn_triage_decisions_total{decision="not_iss15_plus",method="lpm"} 1.0' in text
     assert 'aacn_triage_decisions_total{decision="not_iss15_plus",method="baseline"} 1.0' in text
-    assert "aacn_engine_seconds_count 2.0" in text
+    assert "aacn_engine_seconds_count 3.0" in text
     assert "/livez" not in text
 
 

@@ -1,0 +1,169 @@
+"""The orchestrator: which engine answers, intervals, assumptions, determinism."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import pytest
+
+from models.impact_mode import ImpactMode
+from models.notification import (
+    AirbagState,
+    Body,
+    CrashNotification,
+    DriveSide,
+    Occupant,
+    Seat,
+    SummaryPulse,
+)
+from models.triage import (
+    LPM_THRESHOLDS,
+    EngineModels,
+    UnknownVehicleModel,
+    load_engine_models,
+    simulate_notification,
+    triage,
+)
+
+
+@pytest.fixture(scope="module")
+def models() -> EngineModels:
+    return load_engine_models()
+
+
+def _notification(
+    delta_v: float = 56.0,
+    pdof: float = 0.0,
+    *,
+    occupants: tuple[Occupant, ...] | None = None,
+    vehicle_model: str = "compact_sedan",
+    rollover: bool = False,
+) -> CrashNotification:
+    occupant = Occupant(
+        seat=Seat.DRIVER,
+        body=Body.MALE_50TH,
+        belted=True,
+        frontal_airbag=AirbagState.DEPLOYED,
+        age_years=40,
+    )
+    return CrashNotification(
+        event_id="e1",
+        vehicle_model=vehicle_model,
+        drive_side=DriveSide.LEFT,
+        pulse=SummaryPulse(delta_v_kmh=delta_v, pdof_deg=pdof),
+        multiple_impacts=False,
+        rollover=rollover,
+        occupants=occupants or (occupant,),
+    )
+
+
+def test_in_coverage_occupants_are_answered_by_their_occupant_model(
+    models: EngineModels,
+) -> None:
+    result = triage(_notification(56.0, 0.0), models)
+    occ = result.occupants[0]
+    assert occ.method == "lpm"
+    assert occ.impact.mode is ImpactMode.FRONTAL
+    assert occ.iss is not None
+    assert occ.region_ais is not None
+    assert set(occ.region_ais) == {
+        "head_neck",
+        "face",
+        "chest",
+        "abdomen",
+        "extremities",
+        "external",
+    }
+    assert occ.measures is not None
+    assert {"hic15", "nij", "chest_deflection_mm"} <= set(occ.measures)
+    lo, hi = occ.triage.probability_ci95
+    assert lo <= occ.triage.probability <= hi
+    assert occ.triage.threshold == LPM_THRESHOLDS[ImpactMode.FRONTAL]
+    assert occ.baseline.threshold == models.baseline.threshold, "baseline kept as second opinion"
+    assert "lpm_code" in result.models
+    assert "lpm_parameters:compact_sedan" in result.models
+
+
+def test_measure_intervals_contain_the_point_estimate(models: EngineModels) -> None:
+    occ = triage(_notification(45.0, 270.0), models).occupants[0]
+    assert occ.method == "lpm"
+    assert occ.impact.mode is ImpactMode.NEAR_SIDE
+    assert occ.measures is not None
+    assert occ.measures_ci95 is not None
+    for key, value in occ.measures.items():
+        lo, hi = occ.measures_ci95[key]
+        assert lo <= value <= hi or occ.point_outside_interval, key
+    widths = [hi - lo for lo, hi in occ.measures_ci95.values()]
+    assert max(widths) > 0.0, "sensor uncertainty moves at least one measure"
+
+
+def test_out_of_coverage_occupants_get_the_baseline_and_a_note(models: EngineModels) -> None:
+    result = triage(_notification(40.0, 50.0), models)
+    occ = result.occupants[0]
+    assert occ.method == "baseline"
+    assert not occ.impact.in_lpm_coverage
+    assert occ.triage == occ.baseline
+    assert any("outside every occupant model" in a for a in result.assumptions)
+    assert set(result.models) == {"baseline"}
+
+
+def test_severity_rises_with_delta_v(models: EngineModels) -> None:
+    probabilities = [
+        triage(_notification(dv, 0.0), models).occupants[0].triage.probability
+        for dv in (15.0, 35.0, 56.0, 80.0)
+    ]
+    assert probabilities == sorted(probabilities)
+    assert probabilities[-1] > probabilities[0]
+
+
+def test_case_triage_is_the_worst_occupant(models: EngineModels) -> None:
+    driver = Occupant(
+        seat=Seat.DRIVER, body=Body.MALE_50TH, belted=True, frontal_airbag=AirbagState.DEPLOYED
+    )
+    passenger = Occupant(
+        seat=Seat.FRONT_PASSENGER,
+        body=Body.FEMALE_5TH,
+        belted=False,
+        frontal_airbag=AirbagState.NOT_DEPLOYED,
+    )
+    result = triage(_notification(50.0, 270.0, occupants=(driver, passenger)), models)
+    modes = [o.impact.mode for o in result.occupants]
+    assert modes == [ImpactMode.NEAR_SIDE, ImpactMode.FAR_SIDE]
+    worst = max(result.occupants, key=lambda o: (o.triage.iss15_plus, o.triage.probability))
+    assert result.triage == worst.triage
+
+
+def test_out_of_domain_sensor_values_are_clamped_and_reported(models: EngineModels) -> None:
+    occupant = Occupant(
+        seat=Seat.DRIVER,
+        body=Body.MALE_50TH,
+        belted=True,
+        frontal_airbag=AirbagState.DEPLOYED,
+        posture_lumbar_flexion_deg=40.0,
+        seat_track_mm=-250.0,
+    )
+    result = triage(_notification(occupants=(occupant,), rollover=True), models)
+    text = " ".join(result.assumptions)
+    assert "clamped to 25 deg" in text
+    assert "clamped to -120 mm" in text
+    assert "rollover" in text
+
+
+def test_unknown_vehicle_model(models: EngineModels) -> None:
+    with pytest.raises(UnknownVehicleModel):
+        triage(_notification(vehicle_model="bus"), models)
+
+
+def test_bit_for_bit_determinism(models: EngineModels) -> None:
+    a = triage(_notification(48.0, 10.0), models)
+    b = triage(_notification(48.0, 10.0), models)
+    assert a == b  # timings are excluded from the comparison
+    assert dataclasses.replace(a, timings_ms={}) == dataclasses.replace(b, timings_ms={})
+
+
+def test_simulate_notification_keeps_histories(models: EngineModels) -> None:
+    pulse, sims, _ = simulate_notification(_notification(56.0, 0.0), models)
+    assert pulse.delta_v_kmh == pytest.approx(56.0)
+    result = sims[0].result
+    assert result is not None
+    assert "head_accel_g" in result.histories
