@@ -21,6 +21,7 @@ from pydantic import (
 )
 
 from models import notification as engine
+from service.examples import EXAMPLE_CASE_LIST, EXAMPLE_CASE_RESULT, EXAMPLE_STORED_CASE
 
 __all__ = [
     "EXAMPLE_NOTIFICATIONS",
@@ -581,6 +582,8 @@ class ModelVersionOut(OutModel):
 class CaseResult(OutModel):
     """The answer to one notification."""
 
+    model_config = ConfigDict(frozen=True, json_schema_extra={"examples": [EXAMPLE_CASE_RESULT]})
+
     case_id: str | None = Field(description="Id of the stored case (null from the CLI).")
     event_id: str = Field(description="The sender's event id.")
     received_at: datetime = Field(description="When the service received the notification.")
@@ -597,6 +600,8 @@ class CaseResult(OutModel):
 
 class StoredCase(OutModel):
     """A stored case, as the audit trail holds it."""
+
+    model_config = ConfigDict(frozen=True, json_schema_extra={"examples": [EXAMPLE_STORED_CASE]})
 
     case_id: str = Field(description="Id of the case.")
     event_id: str = Field(description="The sender's event id.")
@@ -623,6 +628,8 @@ class CaseSummary(OutModel):
 
 class CaseList(OutModel):
     """A page of cases, newest first."""
+
+    model_config = ConfigDict(frozen=True, json_schema_extra={"examples": [EXAMPLE_CASE_LIST]})
 
     items: list[CaseSummary] = Field(description="The cases of this page.")
     next_cursor: str | None = Field(description="Pass as `cursor` for the next page; null at end.")

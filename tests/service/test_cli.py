@@ -144,11 +144,16 @@ def test_console_script_serves_real_http(tmp_path: Path) -> None:
         else:
             pytest.fail(f"server never became ready: {log.read_text()}")
         h = {"Authorization": f"Bearer {key}"}
-        body = example("summary")
-        created = httpx.post(base + "/v1/cases", json=body, headers=h, timeout=30)
-        assert created.status_code == 201, created.text
-        got = httpx.get(base + created.headers["location"], headers=h, timeout=30)
-        assert got.json()["result"] == created.json()
+        for kind in ("summary", "delta_v", "acceleration"):
+            body = example(kind)
+            created = httpx.post(base + "/v1/cases", json=body, headers=h, timeout=30)
+            assert created.status_code == 201, created.text
+            got = httpx.get(base + created.headers["location"], headers=h, timeout=30)
+            assert got.json()["result"] == created.json()
+            assert got.json()["notification"] == body
+            replay = httpx.post(base + "/v1/cases", json=body, headers=h, timeout=30)
+            assert replay.status_code == 200
+            assert replay.headers["idempotent-replayed"] == "true"
         assert httpx.post(base + "/v1/cases", json=body, timeout=30).status_code == 401
     finally:
         server.terminate()

@@ -13,6 +13,14 @@ from service.settings import Settings
 from tests.support import ApiClient, assert_problem, summary
 
 
+def test_the_documented_result_example_is_a_valid_result() -> None:
+    from service.examples import EXAMPLE_CASE_RESULT, EXAMPLE_STORED_CASE
+    from service.schemas import CaseResult, StoredCase
+
+    CaseResult.model_validate(EXAMPLE_CASE_RESULT)
+    StoredCase.model_validate(EXAMPLE_STORED_CASE)
+
+
 def test_livez_and_readyz(api: ApiClient) -> None:
     assert api.client.get("/livez").json() == {"status": "ok"}
     ready = api.client.get("/readyz")
@@ -65,6 +73,8 @@ def test_openapi_document_validates_with_descriptions_and_examples(api: ApiClien
         assert schema.get("description"), f"schema {name} has no description"
         _walk_properties(schema, name, missing)
     assert not missing, f"fields without description: {missing}"
+    for name in ("CrashNotificationIn", "CaseResult", "StoredCase", "CaseList", "Problem"):
+        assert schemas[name].get("examples"), f"{name} has no example"
     post = doc["paths"]["/v1/cases"]["post"]
     examples = post["requestBody"]["content"]["application/json"]["examples"]
     assert set(examples) == set(EXAMPLE_NOTIFICATIONS)
