@@ -22,7 +22,7 @@ import numpy.typing as npt
 from models.impact_mode import ImpactMode
 from models.lpm import kernel as K
 from models.lpm.params import ParameterSet
-from models.notification import Body, Occupant
+from models.notification import Body, Occupant, Seat
 
 __all__ = ["ContactSpec", "Model", "Restraints", "build_model"]
 
@@ -47,12 +47,16 @@ class Restraints:
     belted : bool
     pretensioner_fire_s : float or None
         Pretensioner firing time, s; None when it does not fire.
+    airbag_equipped : bool
+        The seat has a frontal airbag (deployed or not): the shoulder belt then
+        has the lower load limit ``frontal.belt.load_limit_airbag``.
     """
 
     airbag: bool
     airbag_fire_s: float
     belted: bool
     pretensioner_fire_s: float | None
+    airbag_equipped: bool = False
 
 
 @dataclass(frozen=True)
@@ -77,6 +81,9 @@ class ContactSpec:
     k_bottom: float = 0.0
     ramp: float = 0.005
     enabled: bool = True
+    share: float = -1.0
+    bottom_cap: float = 0.0
+    crush_viscosity: float = 200.0
 
     def row(self, side: float) -> list[float]:
         """The contact as a row of the kernel's contact table.
@@ -118,13 +125,13 @@ class Model:
         "sagittal" or "coronal".
     ll : ndarray, shape (5,)
     mb : ndarray, shape (6, 5)
-    jt : ndarray, shape (4, 6)
+    jt : ndarray, shape (4, 7)
     ch : ndarray, shape (6,)
     se : ndarray, shape (4,)
     ct : ndarray, shape (nc, 20)
     bt : ndarray, shape (nb, 20)
     bag : ndarray, shape (8,)
-    y0 : ndarray, shape (12 + 2 nb,)
+    y0 : ndarray, shape (12 + 2 nb + nc,)
     contact_names, belt_names : tuple of str
     """
 
@@ -219,9 +226,19 @@ def _body_arrays(
     return ll, mb, ch
 
 
-def _joint_table(ps: ParameterSet, b: str, lateral: bool, q0: np.ndarray) -> FloatArray:
+def _joint_table(
+    ps: ParameterSet, b: str, lateral: bool, q0: np.ndarray, qn: np.ndarray | None = None
+) -> FloatArray:
+    """Joint table; ``qn`` is the neutral posture (the stops bound the range from it).
+
+    The occupant holds a forward lean with muscle tone, so the springs rest in
+    the initial posture ``q0`` (an equilibrium at t = 0), but the end of each
+    joint's range is anatomical: a lumbar flexion of 25 deg leaves 19 deg less
+    flexion before the stop than the neutral 5.8 deg.
+    """
     names = ("lumbar", "thoracic", "lower_neck", "upper_neck")
-    jt = np.zeros((4, 6))
+    jt = np.zeros((4, 7))
+    qref = q0 if qn is None else qn
     for j, jn in enumerate(names):
         if lateral:
             pre = f"body.{b}.joint_lateral.{jn}."
@@ -230,7 +247,16 @@ def _joint_table(ps: ParameterSet, b: str, lateral: bool, q0: np.ndarray) -> Flo
             pre = f"body.{b}.joint.{jn}."
             kf, ke = ps[pre + "k_flexion"], ps[pre + "k_extension"]
         rest = q0[1] if j == 0 else q0[j + 1] - q0[j]
-        jt[j] = [kf, ke, ps[pre + "damping"], ps[pre + "stop_angle"], ps[pre + "k_stop"], rest]
+        rest_n = qref[1] if j == 0 else qref[j + 1] - qref[j]
+        jt[j] = [
+            kf,
+            ke,
+            ps[pre + "damping"],
+            ps[pre + "stop_angle"],
+            ps[pre + "k_stop"],
+            rest,
+            rest_n - rest,
+        ]
     return jt
 
 
@@ -298,7 +324,7 @@ def _sagittal(ps: ParameterSet, occ: Occupant, rs: Restraints) -> Model:
 
     q0 = posture(lean)
     qn = posture(0.0)
-    jt = _joint_table(ps, b, False, q0)
+    jt = _joint_table(ps, b, False, q0, qn)
     mass = float(mb[:, 3].sum())
     se = np.array([ps["seat.friction"], mass * ps["seat.gravity"], ps["seat.slip_speed"], 0.0])
 
@@ -308,14 +334,39 @@ def _sagittal(ps: ParameterSet, occ: Occupant, rs: Restraints) -> Model:
     kbot = ps["seat.bottoming_stiffness"]
     ramp = ps["frontal.contact_damping_ramp"]
 
-    # steering wheel and airbag (vehicle fixed: shift by -track)
+    # steering wheel and airbag (vehicle fixed: shift by -track); the front
+    # passenger has no wheel, a larger bag deploying from the instrument panel
+    # top, and his own panel and knee-bolster geometry (frontal.passenger.*)
+    passenger = occ.seat is Seat.FRONT_PASSENGER
+    has_wheel = not passenger
     hub = np.array([ps["frontal.wheel.hub_x"] - track, ps["frontal.wheel.hub_z"]])
     ang = math.radians(ps["frontal.wheel.angle"])
     t_dir = np.array([-math.sin(ang), math.cos(ang)])
     n_dir = np.array([-math.cos(ang), -math.sin(ang)])
     wa, wb = _seg(hub, t_dir, ps["frontal.wheel.radius"])
-    ba, bb = _seg(hub, t_dir, ps["frontal.airbag.half_height"])
-    bag_motion = (float(n_dir[0]), float(n_dir[1]))
+    bag_depth = ps["frontal.airbag.depth"]
+    if passenger:
+        module = np.array(
+            [
+                ps["frontal.passenger.airbag.module_x"] - track,
+                ps["frontal.passenger.airbag.module_z"],
+            ]
+        )
+        pang = math.radians(ps["frontal.passenger.airbag.angle"])
+        pt_dir = np.array([-math.sin(pang), math.cos(pang)])
+        pn_dir = np.array([-math.cos(pang), -math.sin(pang)])
+        ba, bb = _seg(module, pt_dir, ps["frontal.passenger.airbag.half_height"])
+        bag_motion = (float(pn_dir[0]), float(pn_dir[1]))
+        bag_depth = ps["frontal.passenger.airbag.depth"]
+        dash_pre = "frontal.passenger.dash."
+        knee_gap = ps["frontal.passenger.knee_gap"]
+    else:
+        ba, bb = _seg(hub, t_dir, ps["frontal.airbag.half_height"])
+        bag_motion = (float(n_dir[0]), float(n_dir[1]))
+        dash_pre = "frontal.dash."
+        knee_gap = ps["frontal.knee.gap"]
+    dash_a = (ps[dash_pre + "x0"] - track, ps[dash_pre + "z0"])
+    dash_b = (ps[dash_pre + "x1"] - track, ps[dash_pre + "z1"])
     contacts: list[ContactSpec] = [
         ContactSpec(
             "airbag_head",
@@ -350,6 +401,7 @@ def _sagittal(ps: ParameterSet, occ: Occupant, rs: Restraints) -> Model:
             fcap=ps["frontal.airbag.chest_force"],
             ramp=ps["frontal.airbag.ramp"],
             enabled=rs.airbag,
+            share=ps["frontal.airbag.chest_sternum_share"],
         ),
         ContactSpec(
             "wheel_chest",
@@ -365,6 +417,9 @@ def _sagittal(ps: ParameterSet, occ: Occupant, rs: Restraints) -> Model:
             give=ps["frontal.wheel.stroke"],
             k_bottom=kbot,
             ramp=ramp,
+            enabled=has_wheel,
+            bottom_cap=ps["frontal.wheel.bottom_cap"],
+            crush_viscosity=ps["numerics.crush_viscosity"],
         ),
         ContactSpec(
             "wheel_head",
@@ -378,6 +433,9 @@ def _sagittal(ps: ParameterSet, occ: Occupant, rs: Restraints) -> Model:
             give=ps["frontal.wheel.stroke"],
             k_bottom=kbot,
             ramp=ramp,
+            enabled=has_wheel,
+            bottom_cap=ps["frontal.wheel.bottom_cap"],
+            crush_viscosity=ps["numerics.crush_viscosity"],
         ),
         ContactSpec(
             "windshield_head",
@@ -396,14 +454,16 @@ def _sagittal(ps: ParameterSet, occ: Occupant, rs: Restraints) -> Model:
             "dash_head",
             *head,
             head_r,
-            (ps["frontal.dash.x0"] - track, ps["frontal.dash.z0"]),
-            (ps["frontal.dash.x1"] - track, ps["frontal.dash.z1"]),
+            dash_a,
+            dash_b,
             stiff=ps["frontal.dash.stiffness"],
             damp=ps["frontal.wheel.damping"],
             fcap=ps["frontal.dash.cap"],
             give=ps["frontal.dash.give"],
             k_bottom=kbot,
             ramp=ramp,
+            bottom_cap=ps["frontal.dash.bottom_cap"],
+            crush_viscosity=ps["numerics.crush_viscosity"],
         ),
         ContactSpec(
             "dash_chest",
@@ -411,14 +471,16 @@ def _sagittal(ps: ParameterSet, occ: Occupant, rs: Restraints) -> Model:
             h_s,
             r_s,
             0.02,
-            (ps["frontal.dash.x0"] - track, ps["frontal.dash.z0"]),
-            (ps["frontal.dash.x1"] - track, ps["frontal.dash.z1"]),
+            dash_a,
+            dash_b,
             stiff=ps["frontal.dash.stiffness"],
             damp=ps["frontal.wheel.damping"],
             fcap=ps["frontal.dash.cap"],
             give=ps["frontal.dash.give"],
             k_bottom=kbot,
             ramp=ramp,
+            bottom_cap=ps["frontal.dash.bottom_cap"],
+            crush_viscosity=ps["numerics.crush_viscosity"],
         ),
     ]
     # knee bolster: the knee moves with the pelvis; the bolster is placed for the
@@ -426,10 +488,7 @@ def _sagittal(ps: ParameterSet, occ: Occupant, rs: Restraints) -> Model:
     knee = (0, ps[pre + "thigh_length"], ps[pre + "knee_height"])
     knee_r = ps[pre + "knee_radius"]
     x_bolster = (
-        ps["body.male_50th.thigh_length"]
-        + ps["body.male_50th.knee_radius"]
-        + ps["frontal.knee.gap"]
-        - track
+        ps["body.male_50th.thigh_length"] + ps["body.male_50th.knee_radius"] + knee_gap - track
     )
     kz = ps["body.male_50th.knee_height"]
     contacts.append(
@@ -445,6 +504,8 @@ def _sagittal(ps: ParameterSet, occ: Occupant, rs: Restraints) -> Model:
             give=ps["frontal.knee.give"],
             k_bottom=kbot,
             ramp=ramp,
+            bottom_cap=ps["frontal.knee.bottom_cap"],
+            crush_viscosity=ps["numerics.crush_viscosity"],
         )
     )
     # seat back and head restraint (seat fixed): touching in the neutral posture
@@ -505,6 +566,9 @@ def _sagittal(ps: ParameterSet, occ: Occupant, rs: Restraints) -> Model:
             t0,
             t0 + ps["frontal.belt.pretensioner_duration"],
         )
+    load_limit = ps[
+        "frontal.belt.load_limit_airbag" if rs.airbag_equipped else "frontal.belt.load_limit"
+    ]
     dring = (ps["frontal.belt.dring_x"] - track, ps["frontal.belt.dring_z"])
     buckle = (ps["frontal.belt.buckle_x"], ps["frontal.belt.buckle_z"])
     lap_a = (ps["frontal.belt.lap_anchor_x"], ps["frontal.belt.lap_anchor_z"])
@@ -519,7 +583,7 @@ def _sagittal(ps: ParameterSet, occ: Occupant, rs: Restraints) -> Model:
             ps["frontal.belt.shoulder_stiffness"],
             ps["frontal.belt.shoulder_damping"],
             ps["frontal.belt.shoulder_slack"],
-            ps["frontal.belt.load_limit"],
+            load_limit,
             c_ll,
             pt,
             q0,
@@ -549,7 +613,7 @@ def _sagittal(ps: ParameterSet, occ: Occupant, rs: Restraints) -> Model:
         [
             t_start if rs.airbag else _NEVER,
             t_full if rs.airbag else _NEVER + 1.0,
-            ps["frontal.airbag.depth"] if rs.airbag else 0.0,
+            bag_depth if rs.airbag else 0.0,
             t_full + ps["frontal.airbag.vent_start"],
             ps["frontal.airbag.vent_duration"],
             ps["frontal.airbag.vent_fraction"],
@@ -572,7 +636,7 @@ def _sagittal(ps: ParameterSet, occ: Occupant, rs: Restraints) -> Model:
         {
             "airbag_fire_s": rs.airbag_fire_s if rs.airbag else math.nan,
             "t_full_s": t_full if rs.airbag else math.nan,
-            "airbag_depth_m": ps["frontal.airbag.depth"],
+            "airbag_depth_m": bag_depth,
             "pretensioner_fire_s": (
                 rs.pretensioner_fire_s if rs.pretensioner_fire_s is not None else math.nan
             ),
@@ -610,6 +674,12 @@ def _coronal(ps: ParameterSet, occ: Occupant, rs: Restraints, far: bool) -> Mode
         dx, zl, zh = ps["side.door_x"], ps["side.door_z_low"], ps["side.door_z_high"]
         wx, wz = ps["side.window_x"], ps["side.window_z_high"]
         up = ps["side.upper_intrusion_ratio"]
+        # a head whose CG sits below the top of the striking barrier face is hit
+        # by the barrier through the window with the full door intrusion (the
+        # IIHS barrier represents a pickup/SUV front at a small occupant's head
+        # height); a taller occupant's head sees the smaller upper intrusion
+        head_z = float(_point(q0, ll, *head)[1])
+        up_head = 1.0 if head_z < ps["side.barrier_top_z"] else up
         door = ((dx, zl), (dx, zh))
         window = ((wx, zh), (ps["side.window_top_x"], wz))  # tumblehome
         contacts += [
@@ -678,7 +748,7 @@ def _coronal(ps: ParameterSet, occ: Occupant, rs: Restraints, far: bool) -> Mode
                 *head,
                 head_r,
                 *window,
-                (-up, 0.0),
+                (-up_head, 0.0),
                 channel=1,
                 stiff=ps["side.head_stiffness"],
                 damp=damp,
@@ -775,6 +845,9 @@ def _coronal(ps: ParameterSet, occ: Occupant, rs: Restraints, far: bool) -> Mode
                 ramp=ramp,
             ),
         ]
+        load_limit = ps[
+            "frontal.belt.load_limit_airbag" if rs.airbag_equipped else "frontal.belt.load_limit"
+        ]
         belts.append(
             _belt_row(
                 2,
@@ -785,7 +858,7 @@ def _coronal(ps: ParameterSet, occ: Occupant, rs: Restraints, far: bool) -> Mode
                 ps["side.far.shoulder_belt_stiffness"],
                 ps["frontal.belt.shoulder_damping"],
                 ps["frontal.belt.shoulder_slack"],
-                ps["frontal.belt.load_limit"],
+                load_limit,
                 ps["frontal.belt.limiter_viscosity"],
                 None,
                 q0,
@@ -819,10 +892,13 @@ def _finish(
         side = 1.0 if (-ez * (pos[0] - c.a[0]) + ex * (pos[1] - c.a[1])) >= 0.0 else -1.0
         length = math.hypot(ex, ez)
         ux, uz = ex / length, ez / length
-        rows.append(c.row(side) + [ux, uz, length, -uz * side, ux * side])
+        rows.append(
+            c.row(side)
+            + [ux, uz, length, -uz * side, ux * side, c.share, c.bottom_cap, c.crush_viscosity]
+        )
     ct = np.array(rows, dtype=np.float64).reshape(-1, K.NCF)
     bt = np.array(belts, dtype=np.float64).reshape(-1, K.NBF)
-    y0 = np.zeros(2 * K.NQ + 2 * bt.shape[0])
+    y0 = np.zeros(2 * K.NQ + 2 * bt.shape[0] + ct.shape[0])
     y0[: K.NQ] = q0
     return Model(
         plane,

@@ -22,7 +22,9 @@ idx   meaning                                                     unit
 
 Angles are positive when the link tilts toward +x. The state vector is
 ``y = [q, qdot, belt states]`` with two belt states per belt (webbing paid out
-by the load limiter, webbing reeled in by the pretensioner), shape (12 + 2 nb,).
+by the load limiter, webbing reeled in by the pretensioner), then one state per
+contact (permanent crush of the structure behind the contact's give, m):
+shape (12 + 2 nb + nc,).
 
 The vehicle frame is not inertial: every mass carries ``-m a_veh`` along x,
 with ``a_veh`` the vehicle acceleration resolved on the model axis. Gravity
@@ -48,6 +50,7 @@ right-hand side per step) and :func:`integrate_rk4`; both compiled with
 from __future__ import annotations
 
 import math
+from typing import Any
 
 import numpy as np
 from numba import njit
@@ -68,10 +71,18 @@ __all__ = [
 NQ = 6
 G0 = 9.80665
 
+#: Compile option of the hot loops: numba's private ``_nrt=False`` flag turns
+#: off reference counting (NRT) in functions that allocate nothing. With it on,
+#: every inlined helper call and row view in the right-hand side costs atomic
+#: incref/decref pairs, which made the kernel about 5x slower. Passed as a dict
+#: because the flag is not part of numba's typed signature.
+_NO_NRT: dict[str, Any] = {"_nrt": False}
+
 # --- column layouts of the packed parameter arrays -------------------------
 # Mass table MB (nm, 5): k, p, r, mass (kg), rotational inertia (kg m^2, about CG)
-# Joint table JT (4, 6): k_flex (N m/rad), k_ext (N m/rad), c (N m s/rad),
-#   stop angle (rad), stop stiffness (N m/rad), rest relative angle (rad)
+# Joint table JT (4, 7): k_flex (N m/rad), k_ext (N m/rad), c (N m s/rad),
+#   stop angle (rad), stop stiffness (N m/rad), rest relative angle (rad),
+#   offset of the stop centre from the rest angle (rad; neutral rest - rest)
 # Link lengths LL (5,): LL[j] length of link j (m), LL[0] unused
 # Chest CH (6,): k (N/m), k3 (N/m^3), c (N s/m), bottoming deflection (m),
 #   bottoming stiffness (N/m), share of the deflection followed by k = 6 points (-)
@@ -104,10 +115,19 @@ CONTACT_FIELDS = (
     "length",
     "nx",
     "nz",
+    "share",
+    "bottom_cap",
+    "crush_viscosity",
 )
 C_KB, C_P, C_R, C_RAD, C_AX, C_AZ, C_BX, C_BZ, C_MX, C_MZ, C_CH, C_LAW = range(12)
 C_K, C_K3, C_C, C_FCAP, C_GIVE, C_KBOT, C_RAMP, C_EN, C_SIDE = range(12, 21)
 C_UX, C_UZ, C_LEN, C_NX, C_NZ = range(21, 26)  # derived: unit direction, length, normal
+# share of the chest deflection followed by a k = 6 contact point (< 0: use ch[5])
+C_SHARE = 26
+# force limit of the structure behind the give (secondary crush plateau, N; 0: none)
+C_BCAP = 27
+# viscosity of the crush beyond the give (N s/m): crush rate = (F - bottom_cap) / c
+C_CCR = 28
 NCF = len(CONTACT_FIELDS)
 
 BELT_FIELDS = (
@@ -335,9 +355,20 @@ def _bag_state(t: float, bag: np.ndarray) -> tuple[float, float, float, float, f
 
 @njit(cache=True, inline="always", error_model="numpy")
 def _contact_force(
-    pen: float, pendot: float, ct: np.ndarray, scale: float, damp_on: float, k_dep: float
-) -> tuple[float, float]:
-    """Normal contact force (N, >= 0) and its elastic part for a penetration (m)."""
+    pen: float,
+    pendot: float,
+    ct: np.ndarray,
+    scale: float,
+    damp_on: float,
+    k_dep: float,
+    crush: float,
+) -> tuple[float, float, float]:
+    """Normal contact force (N, >= 0), its elastic part, and the crush rate (m/s).
+
+    ``crush`` (m) is the permanent crush of the structure behind the give
+    (state of the contact); it grows, viscoplastically, while the force
+    beyond the give would exceed the contact's ``bottom_cap``.
+    """
     ramp = ct[C_RAMP]
     fr = pen / ramp if ramp > 0.0 else 1.0
     if fr > 1.0:
@@ -358,13 +389,24 @@ def _contact_force(
     f = fe + fd
     if ct[C_LAW] == 0.0 and ct[C_FCAP] > 0.0 and f > ct[C_FCAP]:
         f = ct[C_FCAP]  # elastic-plastic: damping does not lift the crush force
-    if pen > ct[C_GIVE]:
-        fb = ct[C_KBOT] * (pen - ct[C_GIVE])
+    rate = 0.0
+    xb = pen - ct[C_GIVE] - crush
+    if xb > 0.0:
+        fb = ct[C_KBOT] * xb
         fe += fb
         f += fb
+        # beyond the give the structure behind the trim (steering assembly,
+        # knee-bolster bracket) crushes at a force limit instead of acting as a
+        # rigid wall; the crush is permanent (dissipative)
+        bcap = ct[C_BCAP]
+        if bcap > 0.0 and f > bcap:
+            rate = (f - bcap) / ct[C_CCR]
+            f = bcap
+            if fe > bcap:
+                fe = bcap
     if f < 0.0:
         f = 0.0
-    return f, fe
+    return f, fe, rate
 
 
 @njit(cache=True, inline="always", error_model="numpy")
@@ -376,9 +418,12 @@ def _joint_torque(rel: float, reld: float, jt: np.ndarray) -> tuple[float, float
         k = jt[1]
     tau = k * rel
     en = 0.5 * k * rel * rel
-    ex = abs(rel) - jt[3]
+    # the stop limits the anatomical range, measured from the neutral posture
+    # (jt[6] = neutral rest - actual rest: a forward lean uses part of the range)
+    rel_a = rel - jt[6]
+    ex = abs(rel_a) - jt[3]
     if ex > 0.0:
-        sg = 1.0 if rel > 0.0 else -1.0
+        sg = 1.0 if rel_a > 0.0 else -1.0
         tau += jt[4] * ex * sg
         en += 0.5 * jt[4] * ex * ex
     return tau + jt[2] * reld, en
@@ -409,7 +454,7 @@ def rhs(
     ----------
     t : float
         Time, s.
-    y : ndarray, shape (12 + 2 nb,)
+    y : ndarray, shape (12 + 2 nb + nc,)
         State.
     ll, mb, jt, ch, se, ct, bt, bag : ndarray
         Packed parameters (see the module layouts).
@@ -432,7 +477,9 @@ def rhs(
     return dy
 
 
-@njit(cache=True, error_model="numpy")
+# no reference counting inside the right-hand side (see _NO_NRT): 0.4 instead of
+# 2.2 us per call on the benchmark machine
+@njit(cache=True, error_model="numpy", **_NO_NRT)
 def rhs_into(
     t: float,
     y: np.ndarray,
@@ -459,7 +506,7 @@ def rhs_into(
     ----------
     t : float
         Time, s.
-    y : ndarray, shape (12 + 2 nb,)
+    y : ndarray, shape (12 + 2 nb + nc,)
         State.
     ll, mb, jt, ch, se, ct, bt, bag : ndarray
         Packed parameters (see the module layouts).
@@ -576,7 +623,8 @@ def rhs_into(
                 diag[DIAG_FIXED + nc + nb + c] = 0.0
             continue
         k = int(row[C_KB])
-        px, pz = pos_sc(q, ll, sn, cs, k, row[C_P], row[C_R], ch[5])
+        beta = row[C_SHARE] if row[C_SHARE] >= 0.0 else ch[5]
+        px, pz = pos_sc(q, ll, sn, cs, k, row[C_P], row[C_R], beta)
         ch_id = row[C_CH]
         sv = 0.0
         vv = 0.0
@@ -625,9 +673,18 @@ def rhs_into(
                 nx = dx / dist
                 nz = dz / dist
                 pen = row[C_RAD] - dist
+        # a crushable structure is met from its front only: a point that went
+        # around the end of the segment (the head over the wheel rim) and comes
+        # back into its span from behind is not in contact with it (the depth
+        # test cannot be reached from the front: there the crush follows the
+        # penetration within (F - bottom_cap)/c of travel)
+        if row[C_BCAP] > 0.0:
+            crush = y[2 * NQ + 2 * nb + c]
+            if pen - row[C_GIVE] - crush > 2.0 * row[C_BCAP] / row[C_KBOT]:
+                pen = -1.0
         fmag = 0.0
         if pen > 0.0:
-            kin_sc(q, qd, ll, sn, cs, k, row[C_P], row[C_R], jx, jz, ch[5])
+            kin_sc(q, qd, ll, sn, cs, k, row[C_P], row[C_R], jx, jz, beta)
             vpx = 0.0
             vpz = 0.0
             for a in range(NQ):
@@ -636,7 +693,10 @@ def rhs_into(
             vsx = row[C_MX] * vv
             vsz = row[C_MZ] * vv
             pendot = -((vpx - vsx) * nx + (vpz - vsz) * nz)
-            fmag, fe = _contact_force(pen, pendot, row, scale, damp_on, kdep)
+            fmag, fe, crate = _contact_force(
+                pen, pendot, row, scale, damp_on, kdep, y[2 * NQ + 2 * nb + c]
+            )
+            dy[2 * NQ + 2 * nb + c] = crate
             for a in range(NQ):
                 f[a] += fmag * (nx * jx[a] + nz * jz[a])
             p_active += fmag * (nx * vsx + nz * vsz)
@@ -912,6 +972,58 @@ def integrate_rk4(
     return ys, diags, status
 
 
+@njit(cache=True, error_model="numpy", nogil=True, **_NO_NRT)
+def _se_loop(
+    y: np.ndarray,
+    k1: np.ndarray,
+    ws: np.ndarray,
+    ys: np.ndarray,
+    diags: np.ndarray,
+    dt: float,
+    ll: np.ndarray,
+    mb: np.ndarray,
+    jt: np.ndarray,
+    ch: np.ndarray,
+    se: np.ndarray,
+    ct: np.ndarray,
+    bt: np.ndarray,
+    bag: np.ndarray,
+    t0: float,
+    dt_in: float,
+    acc: np.ndarray,
+    door_s: np.ndarray,
+    door_v: np.ndarray,
+) -> int:
+    """Inner loop of :func:`integrate_se` (no allocation, no reference counting).
+
+    Returns the number of rows written; fewer than ``ys.shape[0]`` when the
+    state became non-finite.
+    """
+    n = ys.shape[0]
+    ny = y.shape[0]
+    for i in range(n):
+        t = i * dt
+        for j in range(ny):
+            ys[i, j] = y[j]
+        rhs_into(
+            t, y, k1, ll, mb, jt, ch, se, ct, bt, bag, t0, dt_in, acc, door_s, door_v, diags[i], ws
+        )
+        if i == n - 1:
+            break
+        ok = True
+        for j in range(NQ):
+            y[NQ + j] += dt * k1[NQ + j]
+            y[j] += dt * y[NQ + j]
+        for j in range(2 * NQ, ny):
+            y[j] += dt * k1[j]
+        for j in range(ny):
+            if not math.isfinite(y[j]):
+                ok = False
+        if not ok:
+            return i + 1
+    return n
+
+
 @njit(cache=True, error_model="numpy", nogil=True)
 def integrate_se(
     y0: np.ndarray,
@@ -945,27 +1057,9 @@ def integrate_se(
     ws = np.zeros((NQ + 14, NQ))
     k1 = np.zeros(ny)
     y = y0.copy()
-    status = 0
-    for i in range(n):
-        t = i * dt
-        ys[i] = y
-        rhs_into(
-            t, y, k1, ll, mb, jt, ch, se, ct, bt, bag, t0, dt_in, acc, door_s, door_v, diags[i], ws
-        )
-        if i == n - 1:
-            break
-        ok = True
-        for j in range(NQ):
-            y[NQ + j] += dt * k1[NQ + j]
-            y[j] += dt * y[NQ + j]
-        for j in range(2 * NQ, ny):
-            y[j] += dt * k1[j]
-        for j in range(ny):
-            if not math.isfinite(y[j]):
-                ok = False
-        if not ok:
-            status = -1
-            ys = ys[: i + 1]
-            diags = diags[: i + 1]
-            break
-    return ys, diags, status
+    done = _se_loop(
+        y, k1, ws, ys, diags, dt, ll, mb, jt, ch, se, ct, bt, bag, t0, dt_in, acc, door_s, door_v
+    )
+    if done < n:
+        return ys[:done], diags[:done], -1
+    return ys, diags, 0

@@ -73,3 +73,16 @@ def test_rk4_path_agrees(params: ParameterSet) -> None:
     b = _result(pr, 0.0, *_run_kernel(pr, 1e-4, "rk4"))
     for k, v in _measures(b).items():
         assert abs(_measures(a)[k] - v) <= 0.02 * abs(v), k
+
+
+@pytest.mark.parametrize("cfc", [180, 600, 1000])
+def test_stacked_cfc_filter_is_bit_identical_to_cfc_filter(cfc: int) -> None:
+    """The measures filter several channels at once; the result must not change."""
+    from models.injury.filters import cfc_filter
+    from models.lpm.simulate import _filtered_stack
+
+    rng = np.random.default_rng(cfc)
+    rows = [np.cumsum(rng.normal(size=2001)) for _ in range(3)]
+    stacked = _filtered_stack(rows, 1e4, cfc)
+    for i, x in enumerate(rows):
+        assert np.array_equal(stacked[i], cfc_filter(x, 1e4, cfc))

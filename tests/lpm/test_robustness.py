@@ -28,6 +28,7 @@ AXIS = {
     dv=st.floats(5.0, 70.0),
     duration_ms=st.floats(40.0, 140.0),
     body=st.sampled_from(list(Body)),
+    seat=st.sampled_from(list(Seat)),
     belted=st.booleans(),
     airbag=st.sampled_from(list(AirbagState)),
     lean=st.floats(5.8, 25.0),
@@ -40,6 +41,7 @@ def test_random_cases_are_finite(
     dv: float,
     duration_ms: float,
     body: Body,
+    seat: Seat,
     belted: bool,
     airbag: AirbagState,
     lean: float,
@@ -47,7 +49,7 @@ def test_random_cases_are_finite(
     fire_ms: float | None,
 ) -> None:
     occ = Occupant(
-        seat=Seat.DRIVER,
+        seat=seat,
         body=body,
         belted=belted,
         frontal_airbag=airbag,
