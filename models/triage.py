@@ -21,7 +21,7 @@ import dataclasses
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Protocol
+from pathlib import Path
 
 from models import ENGINE_VERSION
 from models.baseline.logistic import BaselineFeatures, BaselineModel, load_default
@@ -33,6 +33,8 @@ from models.lpm.params import ParameterSet, available_parameter_sets, load_param
 from models.lpm.simulate import LpmResult, simulate, warm_up
 from models.notification import AirbagState, Body, CrashNotification, Occupant, Seat
 from models.pulse import ProcessedPulse, process_pulse
+from models.surrogate.evaluate import SurrogateLibrary, UncertaintyResult, default_artifact_dir
+from models.surrogate.spec import P_RESOLUTION
 
 __all__ = [
     "DEFAULT_POSTURE_SD_DEG",
@@ -50,6 +52,7 @@ __all__ = [
     "UnknownVehicleModel",
     "decide",
     "load_engine_models",
+    "load_surrogates",
     "simulate_notification",
     "triage",
 ]
@@ -84,42 +87,9 @@ DEFAULT_POSTURE_SD_DEG = 5.0 / 1.959964
 DEFAULT_SEAT_TRACK_SD_MM = 50.0 / 1.959964
 #: z of a two-sided 95% interval.
 _Z95 = 1.959964
-
-
-class UncertaintyLike(Protocol):
-    """What a surrogate propagation returns (models.surrogate.evaluate.UncertaintyResult)."""
-
-    p_iss15: float
-    p_iss15_ci95: tuple[float, float]
-    iss: float
-    iss_ci95: tuple[float, float]
-    measures: Mapping[str, float]
-    measures_ci95: Mapping[str, tuple[float, float]]
-
-
-class SurrogateFamilyLike(Protocol):
-    def propagate(
-        self,
-        *,
-        delta_v_kmh: float,
-        angle_deg: float,
-        posture_deg: float,
-        seat_track_mm: float,
-        duration_ms: float,
-        posture_sd_deg: float,
-        seat_track_sd_mm: float,
-    ) -> UncertaintyLike: ...
-
-
-class SurrogateLibraryLike(Protocol):
-    """What the orchestrator needs of the surrogate library (models.surrogate.evaluate)."""
-
-    version: str
-    sha256: str
-
-    def family(
-        self, mode: ImpactMode, body: Body, belted: bool, airbag_deployed: bool
-    ) -> SurrogateFamilyLike: ...
+#: Surrogate inputs that describe the crash (not the occupant sensors): a surrogate
+#: is not extrapolated in them.
+_CRASH_INPUTS = frozenset({"delta_v_kmh", "angle_deg", "duration_ms"})
 
 
 class UnknownVehicleModel(ValueError):
@@ -196,7 +166,7 @@ class EngineModels:
         The statistical baseline (always present).
     parameter_sets : Mapping[str, ParameterSet]
         Occupant-model parameter sets by vehicle model name.
-    surrogates : SurrogateLibraryLike or None
+    surrogates : SurrogateLibrary or None
         PCE surrogates for the confidence intervals; None: the interim interval
         from direct occupant-model runs over the sensor-uncertainty box.
     threshold_override : float or None
@@ -207,7 +177,7 @@ class EngineModels:
 
     baseline: BaselineModel
     parameter_sets: Mapping[str, ParameterSet]
-    surrogates: SurrogateLibraryLike | None = None
+    surrogates: SurrogateLibrary | None = None
     threshold_override: float | None = None
     posture_sd_deg: float = DEFAULT_POSTURE_SD_DEG
     seat_track_sd_mm: float = DEFAULT_SEAT_TRACK_SD_MM
@@ -244,12 +214,32 @@ class EngineModels:
         return infos
 
 
+def load_surrogates(directory: Path | None = None) -> SurrogateLibrary | None:
+    """Load and verify the PCE surrogates; None when none are shipped.
+
+    Raises
+    ------
+    ValueError
+        When artifacts are present but fail verification (checksum mismatch, a
+        file missing) or were built from other occupant-model code or parameters.
+    """
+    root = default_artifact_dir() if directory is None else directory
+    if not (root / "manifest.json").is_file() and not any(root.glob("*.npz")):
+        return None
+    library = SurrogateLibrary.load(root)
+    reason = library.stale_reason()
+    if reason is not None:
+        raise ValueError(f"surrogates are stale: {reason}; run `aacn-triage build-surrogates`")
+    return library
+
+
 def load_engine_models(
     threshold_override: float | None = None,
     *,
     posture_sd_deg: float = DEFAULT_POSTURE_SD_DEG,
     seat_track_sd_mm: float = DEFAULT_SEAT_TRACK_SD_MM,
-    surrogates: SurrogateLibraryLike | None = None,
+    surrogate_dir: Path | None = None,
+    use_surrogates: bool = True,
     warm: bool = True,
 ) -> EngineModels:
     """Load and verify the shipped model artifacts, and warm the compiled kernels.
@@ -257,8 +247,9 @@ def load_engine_models(
     Raises
     ------
     ValueError
-        When an artifact is missing or malformed.
+        When an artifact is missing, malformed, or does not match the code.
     """
+    surrogates = load_surrogates(surrogate_dir) if use_surrogates else None
     parameter_sets = {name: load_parameter_set(name) for name in available_parameter_sets()}
     if warm:
         warm_up()
@@ -411,8 +402,11 @@ def _lpm_occupant(
     p = float(nominal.assessment.p_iss15)
     iss = int(nominal.assessment.iss)
     measures = _measures_dict(nominal.measures)
-    uncertainty = None
-    if models.surrogates is not None:
+    uncertainty: UncertaintyResult | None = None
+    # the rear surrogates are built without a frontal airbag acting; an explicit
+    # firing time makes the rear LPM use one, so the surrogate does not apply
+    rear_with_bag = impact.mode is ImpactMode.REAR and occupant.airbag_fire_time_ms is not None
+    if models.surrogates is not None and not rear_with_bag:
         try:
             family = models.surrogates.family(
                 impact.mode,
@@ -434,6 +428,15 @@ def _lpm_occupant(
                 f"occupants[{index}]: surrogate unavailable ({exc}); interval from direct "
                 "occupant-model runs over the sensor-uncertainty box"
             )
+        else:
+            outside_design = set(uncertainty.clamped_inputs) & _CRASH_INPUTS
+            if outside_design:
+                assumptions.append(
+                    f"occupants[{index}]: {', '.join(sorted(outside_design))} outside the "
+                    "surrogate's design range; interval from direct occupant-model runs over "
+                    "the sensor-uncertainty box"
+                )
+                uncertainty = None
     if uncertainty is not None:
         p_ci = (float(uncertainty.p_iss15_ci95[0]), float(uncertainty.p_iss15_ci95[1]))
         iss_ci = (float(uncertainty.iss_ci95[0]), float(uncertainty.iss_ci95[1]))
@@ -443,7 +446,10 @@ def _lpm_occupant(
             if k in measures
         }
         method = "pce_bootstrap"
-        outside = not (p_ci[0] <= p <= p_ci[1]) or not (iss_ci[0] <= iss <= iss_ci[1])
+        tol = P_RESOLUTION  # the surrogate's resolution of P near 0 and 1
+        outside = not (p_ci[0] - tol <= p <= p_ci[1] + tol) or not (
+            iss_ci[0] - 0.5 <= iss <= iss_ci[1] + 0.5
+        )
         if outside:
             assumptions.append(
                 f"occupants[{index}]: the direct occupant-model estimate lies outside the "

@@ -102,6 +102,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
                 threshold_override=settings.triage_threshold,
                 posture_sd_deg=settings.posture_sd_deg,
                 seat_track_sd_mm=settings.seat_track_sd_mm,
+                surrogate_dir=settings.surrogate_dir,
             )
         except Exception as exc:  # reported by /readyz, the service stays alive
             error = f"{type(exc).__name__}: {exc}"

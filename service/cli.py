@@ -9,6 +9,7 @@ Commands::
     aacn-triage triage FILE.json
     aacn-triage triage --batch IN.jsonl --out OUT.jsonl [--resume]
     aacn-triage simulate FILE.json [--plot OUT.png]
+    aacn-triage build-surrogates [--family NAME] [--workers N] ...
     aacn-triage baseline fit [--data CSV] [--out JSON]
 """
 
@@ -148,7 +149,16 @@ def _cmd_triage(args: argparse.Namespace) -> int:
     from models.triage import load_engine_models
 
     settings = _settings()
-    models = load_engine_models(threshold_override=settings.triage_threshold)
+    try:
+        models = load_engine_models(
+            threshold_override=settings.triage_threshold,
+            posture_sd_deg=settings.posture_sd_deg,
+            seat_track_sd_mm=settings.seat_track_sd_mm,
+            surrogate_dir=settings.surrogate_dir,
+        )
+    except ValueError as exc:
+        _print(f"error: the models failed to load: {exc}", err=True)
+        return 1
     if args.batch is None:
         if args.file is None:
             _print("error: give FILE.json or --batch IN.jsonl --out OUT.jsonl", err=True)
@@ -223,7 +233,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         _print(json.dumps(_problem_from_validation(exc), indent=2), err=True)
         return 1
     engine_input, notes = notification.to_engine()
-    models = load_engine_models()
+    models = load_engine_models(use_surrogates=False)
     try:
         pulse, simulations, assumptions = simulate_notification(engine_input, models)
     except (UnknownVehicleModel, ValueError) as exc:
@@ -270,6 +280,12 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     report["plots"] = plots
     _print(json.dumps(report, indent=2))
     return 0
+
+
+def _cmd_build_surrogates(args: argparse.Namespace) -> int:
+    from models.surrogate.build import main as build_main
+
+    return int(build_main(args.build_args) or 0)
 
 
 def _cmd_baseline(args: argparse.Namespace) -> int:
@@ -327,6 +343,14 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("file", help="one notification (JSON)")
     sim.add_argument("--plot", help="draw pulse, motion and measures to this image (PNG)")
     sim.set_defaults(func=_cmd_simulate)
+
+    build = sub.add_parser(
+        "build-surrogates",
+        help="build the PCE surrogate artifacts (offline; needs the `build` extra)",
+        add_help=False,
+    )
+    build.add_argument("build_args", nargs=argparse.REMAINDER, help="see --help")
+    build.set_defaults(func=_cmd_build_surrogates)
 
     base = sub.add_parser("baseline", help="statistical baseline")
     base_sub = base.add_subparsers(dest="baseline_command", required=True)

@@ -51,6 +51,11 @@ class Settings(BaseSettings):
         gt=0.0,
         description="Default seat position sensor SD, mm: within 5 cm 95% of the time (issue 5).",
     )
+    surrogate_dir: Path | None = Field(
+        default=None,
+        description="Directory of the PCE surrogate artifacts; None: the shipped ones. "
+        "Artifacts that fail verification leave the service not ready.",
+    )
     numba_cache_dir: Path | None = Field(
         default=None, description="Directory for numba's compiled-kernel cache (NUMBA_CACHE_DIR)."
     )

@@ -167,3 +167,45 @@ def test_simulate_notification_keeps_histories(models: EngineModels) -> None:
     result = sims[0].result
     assert result is not None
     assert "head_accel_g" in result.histories
+
+
+def test_intervals_come_from_the_surrogates_when_shipped(models: EngineModels) -> None:
+    assert models.surrogates is not None, "the shipped surrogates load and verify"
+    result = triage(_notification(40.0, 0.0), models)
+    occ = result.occupants[0]
+    assert occ.interval_method == "pce_bootstrap"
+    lo, hi = occ.triage.probability_ci95
+    assert lo < hi, "non-degenerate"
+    assert lo <= occ.triage.probability <= hi or occ.point_outside_interval
+    assert occ.iss is not None
+    assert occ.iss.ci95 is not None
+    assert occ.iss.ci95[0] < occ.iss.ci95[1]
+    assert occ.measures_ci95 is not None
+    assert occ.measures is not None
+    for key, (m_lo, m_hi) in occ.measures_ci95.items():
+        assert m_lo < m_hi, key
+    assert "surrogates" in result.models
+
+
+def test_flagged_when_the_direct_estimate_is_outside_the_surrogate_interval(
+    models: EngineModels,
+) -> None:
+    for dv, pdof in ((40.0, 0.0), (30.0, 270.0), (45.0, 180.0), (25.0, 90.0)):
+        result = triage(_notification(dv, pdof), models)
+        occ = result.occupants[0]
+        lo, hi = occ.triage.probability_ci95
+        inside = lo - 2e-3 <= occ.triage.probability <= hi + 2e-3
+        assert occ.iss is not None
+        assert occ.iss.ci95 is not None
+        iss_inside = occ.iss.ci95[0] - 0.5 <= occ.iss.estimate <= occ.iss.ci95[1] + 0.5
+        assert occ.point_outside_interval == (not (inside and iss_inside))
+        if occ.point_outside_interval:
+            assert any("outside the surrogate's 95% interval" in a for a in result.assumptions)
+
+
+def test_without_surrogates_the_interval_comes_from_direct_runs() -> None:
+    bare = load_engine_models(use_surrogates=False)
+    occ = triage(_notification(40.0, 0.0), bare).occupants[0]
+    assert occ.interval_method == "lpm_sensor_box"
+    lo, hi = occ.triage.probability_ci95
+    assert lo <= occ.triage.probability <= hi

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from pathlib import Path
 from typing import Any
 
 from fastapi.testclient import TestClient
@@ -82,3 +83,14 @@ def test_openapi_document_validates_with_descriptions_and_examples(api: ApiClien
     assert kinds == {"acceleration", "delta_v", "summary"}
     assert "bearer" in str(doc["components"]["securitySchemes"]).lower()
     assert "application/problem+json" in post["responses"]["422"]["content"]
+
+
+def test_readyz_is_503_when_surrogate_artifacts_fail_verification(tmp_path: Path) -> None:
+    artifacts = tmp_path / "artifacts"
+    artifacts.mkdir()
+    (artifacts / "manifest.json").write_text('{"files": {"x.npz": "00"}}')
+    settings = Settings(database_url=f"sqlite:///{tmp_path / 'a.db'}", surrogate_dir=artifacts)
+    with TestClient(create_app(settings)) as client:
+        problem = assert_problem(client.get("/readyz"), 503)
+        assert "models not loaded" in problem["detail"]
+        assert "surrogate" in problem["detail"]

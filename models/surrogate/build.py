@@ -1,0 +1,680 @@
+"""Offline build of the PCE surrogate families (``aacn-triage build-surrogates``).
+
+Per family (:data:`models.surrogate.spec.FAMILIES`):
+
+1. Per delta-V piece (:data:`models.surrogate.spec.DELTA_V_PIECES_KMH`), a
+   Latin hypercube design of :attr:`BuildConfig.n_train` points (seeded,
+   uniform in log delta-V and log duration, see ``spec.LOG_INPUTS``) over the
+   piece's input box; plus :attr:`BuildConfig.n_holdout` independent uniform
+   points over the whole family domain for the held-out check. Every point is
+   one direct LPM run (``models.lpm.simulate.simulate`` on a haversine pulse
+   along the PDOF, sampled at 10 kHz, 200 ms simulated).
+2. aPCE basis: per input, the orthonormal recurrence of the design's own
+   empirical distribution (discretised Stieltjes, :mod:`models.surrogate.basis`),
+   on a hyperbolic multi-index set (q = :data:`Q_NORM`) of degree up to 15.
+3. Per output (each measure on a log scale, P(ISS >= 15) on a logit scale, ISS):
+   hybrid LAR with the degree chosen by the corrected analytic LOO
+   (:mod:`models.surrogate.fit`); then :attr:`BuildConfig.n_boot` bootstrap
+   replicates, each *rerunning the LAR selection* on resampled rows at the
+   chosen degree (``pce-notes.md``: a fixed basis gives bands far too narrow).
+4. One artifact ``<family>.npz`` (no pickles) and ``manifest.json`` with the
+   SHA-256 of each file.
+
+Seeded and reproducible bit for bit (single-threaded BLAS per worker, fixed
+member order and timestamps in the files), parallel over processes, resumable
+(a family whose artifact records the same configuration is skipped),
+``--family NAME`` rebuilds one family. chaospy is not needed (the Stieltjes
+recurrence and LAR are a few lines of numpy); it is used only by the tests to
+cross-check the basis.
+"""
+
+from __future__ import annotations
+
+import argparse
+import hashlib
+import json
+import os
+import platform
+import sys
+import time
+import zlib
+from collections.abc import Mapping, Sequence
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import asdict, dataclass, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from models import ENGINE_VERSION
+from models.surrogate.basis import (
+    design_matrix,
+    graded_counts,
+    hyperbolic_multi_indices,
+    stieltjes,
+)
+from models.surrogate.fit import MAX_DEGREE, SparseFit, fit_adaptive, fit_degree
+from models.surrogate.spec import (
+    DELTA_V_PIECES_KMH,
+    FAMILIES,
+    INPUT_NAMES,
+    LOG_INPUTS,
+    LOGIT_CLIP,
+    MEASURE_FLOORS,
+    FamilySpec,
+    _bounds,
+    piece_ranges,
+    to_output_scale,
+    to_unit,
+)
+from models.surrogate.store import (
+    FORMAT_VERSION,
+    MANIFEST_NAME,
+    read_artifact,
+    sha256_file,
+    write_artifact,
+    write_json,
+)
+
+__all__ = [
+    "DEFAULT_SEED",
+    "ISS15_DECISION_PROBABILITY",
+    "Q_NORM",
+    "BuildConfig",
+    "FamilyFit",
+    "build_family",
+    "default_config",
+    "fit_family",
+    "is_current",
+    "latin_hypercube",
+    "lpm_outputs",
+    "main",
+    "standardise",
+    "write_manifest",
+]
+
+FloatArray = npt.NDArray[np.float64]
+
+#: Base seed of every design and bootstrap (families derive theirs from it and their name).
+DEFAULT_SEED = 20261123
+#: q-norm of the hyperbolic truncation (Blatman & Sudret 2011 recommend 0.4-0.75);
+#: 446 candidate terms at degree 15 in 5 inputs.
+Q_NORM = 0.5
+#: Number of bootstrap replicates (reference paper section 2.5, after its ref. [15]).
+N_BOOTSTRAP = 150
+#: An ISS15+ decision from a probability: P(ISS >= 15) >= 0.5 (the more likely class).
+ISS15_DECISION_PROBABILITY = 0.5
+#: Sampling rate of the haversine pulses fed to the LPM, Hz (the service's
+#: models.pulse.DEFAULT_OUTPUT_RATE_HZ).
+PULSE_RATE_HZ = 10_000.0
+#: Simulated duration, s (models.lpm.simulate default).
+SIMULATED_S = 0.2
+#: Mode axis (deg clockwise) for an occupant on the right (models.impact_mode).
+_AXIS_DEG = {"frontal": 0.0, "near_side": 90.0, "rear": 180.0, "far_side": 270.0}
+
+
+@dataclass(frozen=True)
+class BuildConfig:
+    """Settings of a build (recorded in every artifact; a change rebuilds).
+
+    Attributes
+    ----------
+    n_train : int
+        Latin hypercube design size per delta-V piece (LPM runs each PCE is fitted on).
+    n_holdout : int
+        Independent uniform points per family for the held-out check.
+    n_boot : int
+        Bootstrap replicates per output.
+    max_degree : int
+    q_norm : float
+    seed : int
+    delta_v_pieces_kmh : tuple of float
+        Edges of the delta-V pieces (one PCE per piece), km/h.
+    """
+
+    n_train: int = 300
+    n_holdout: int = 150
+    n_boot: int = N_BOOTSTRAP
+    max_degree: int = MAX_DEGREE
+    q_norm: float = Q_NORM
+    seed: int = DEFAULT_SEED
+    delta_v_pieces_kmh: tuple[float, ...] = DELTA_V_PIECES_KMH
+
+
+def default_config() -> BuildConfig:
+    """The configuration of the shipped artifacts."""
+    return BuildConfig()
+
+
+def latin_hypercube(n: int, dim: int, rng: np.random.Generator) -> FloatArray:
+    """Latin hypercube sample in [0, 1)^dim (one point per stratum and input).
+
+    Returns
+    -------
+    ndarray, shape (n, dim)
+    """
+    u = rng.random((n, dim))
+    perms = np.stack([rng.permutation(n) for _ in range(dim)], axis=1)
+    return np.asarray((perms + u) / n, dtype=np.float64)
+
+
+def standardise(x: npt.ArrayLike, ranges: Sequence[tuple[float, float]]) -> FloatArray:
+    """Map raw inputs (n, dim) from their design ranges to [-1, 1] (see spec.LOG_INPUTS)."""
+    return to_unit(x, ranges)
+
+
+def from_unit(z: npt.ArrayLike, ranges: Sequence[tuple[float, float]]) -> FloatArray:
+    """Inverse of :func:`standardise`."""
+    zv = np.atleast_2d(np.asarray(z, dtype=np.float64))
+    lo, hi, lg = _bounds(ranges)
+    u = (zv + 1.0) / 2.0
+    lin = lo + (hi - lo) * u
+    llo = np.log(np.where(lg, lo, 1.0))
+    lhi = np.log(np.where(lg, hi, 2.0))
+    logv = np.exp(llo + (lhi - llo) * u)
+    return np.asarray(np.where(lg, logv, lin), dtype=np.float64)
+
+
+def _seed(config: BuildConfig, *keys: str) -> np.random.Generator:
+    words = [config.seed] + [zlib.crc32(k.encode()) for k in keys]
+    return np.random.default_rng(np.random.SeedSequence(words))
+
+
+def lpm_outputs(
+    spec: FamilySpec, x: npt.ArrayLike, params: Any = None
+) -> tuple[FloatArray, npt.NDArray[np.int64]]:
+    """Direct LPM runs at raw input points of a family.
+
+    Parameters
+    ----------
+    spec : FamilySpec
+    x : array_like, shape (n, 5)
+        Columns of :data:`models.surrogate.spec.INPUT_NAMES` (km/h, deg, deg, mm, ms).
+    params : ParameterSet, optional
+        Default: ``load_parameter_set()``.
+
+    Returns
+    -------
+    y : ndarray, shape (n, n_outputs)
+        Physical values of ``spec.outputs`` (NaN where the run failed).
+    status : ndarray of int64, shape (n,)
+    """
+    from models.lpm.params import load_parameter_set
+    from models.lpm.simulate import simulate
+    from models.notification import AirbagState, Occupant, Seat
+    from models.pulse import STANDARD_GRAVITY, haversine
+
+    ps = load_parameter_set() if params is None else params
+    occ0 = Occupant(
+        seat=Seat.DRIVER,
+        body=spec.body,
+        belted=spec.belted,
+        frontal_airbag=AirbagState.DEPLOYED if spec.airbag_deployed else AirbagState.NOT_DEPLOYED,
+    )
+    xv = np.atleast_2d(np.asarray(x, dtype=np.float64))
+    t = np.arange(int(round(SIMULATED_S * PULSE_RATE_HZ)) + 1) / PULSE_RATE_HZ
+    y = np.full((xv.shape[0], len(spec.outputs)), np.nan)
+    status = np.zeros(xv.shape[0], dtype=np.int64)
+    for i, (dv, ang, posture, seat, dur) in enumerate(xv):
+        tsec = dur / 1000.0
+        amp = 2.0 * (dv / 3.6) / (STANDARD_GRAVITY * tsec)
+        pdof = np.radians(_AXIS_DEG[spec.mode.value] + ang)
+        h = haversine(t, amp, tsec)
+        occ = replace(occ0, posture_lumbar_flexion_deg=float(posture), seat_track_mm=float(seat))
+        r = simulate(
+            t,
+            -np.cos(pdof) * h,
+            -np.sin(pdof) * h,
+            spec.mode,
+            occ,
+            ps,
+            angle_deg=float(ang),
+            duration_s=SIMULATED_S,
+        )
+        status[i] = r.status
+        if r.status < 0 or r.assessment is None:
+            continue
+        for j, name in enumerate(spec.outputs):
+            if name == "p_iss15":
+                y[i, j] = r.assessment.p_iss15
+            elif name == "iss":
+                y[i, j] = r.assessment.iss
+            else:
+                v = getattr(r.measures, name)
+                y[i, j] = np.nan if v is None else float(v)
+    return y, status
+
+
+@dataclass(frozen=True)
+class FamilyFit:
+    """Fitted PCEs of one family (arrays ready for the artifact)."""
+
+    arrays: dict[str, npt.NDArray[Any]]
+    outputs: dict[str, dict[str, Any]]
+
+
+def _fit_output(
+    psi: FloatArray,
+    y: FloatArray,
+    counts: npt.NDArray[np.int64],
+    max_degree: int,
+    n_boot: int,
+    rng: np.random.Generator,
+) -> tuple[SparseFit, list[SparseFit]]:
+    point = fit_adaptive(psi, y, counts, max_degree)
+    sub = psi[:, : counts[point.degree]]
+    n = y.size
+    boots: list[SparseFit] = []
+    draws = 0
+    while len(boots) < n_boot:
+        draws += 1
+        if draws > 4 * n_boot:
+            raise RuntimeError("too many rank-deficient bootstrap replicates")
+        rows = rng.integers(0, n, n)
+        f = fit_degree(sub[rows], y[rows], point.degree)
+        if np.isfinite(f.loo):  # rank-deficient replicates: LOO = inf, skipped
+            boots.append(f)
+    return point, boots
+
+
+def fit_family(
+    spec: FamilySpec,
+    x: FloatArray,
+    y: FloatArray,
+    config: BuildConfig,
+    ranges: tuple[tuple[float, float], ...] | None = None,
+    prefix: str = "",
+) -> FamilyFit:
+    """aPCE + bootstrapped PCE of every output on one design (one delta-V piece).
+
+    Parameters
+    ----------
+    spec : FamilySpec
+    x : ndarray, shape (n, 5)
+        Raw design inputs.
+    y : ndarray, shape (n, n_outputs)
+        Physical LPM outputs (rows with NaN are dropped).
+    config : BuildConfig
+    ranges : tuple of (low, high), optional
+        Design ranges (default ``spec.ranges``).
+    prefix : str, optional
+        Prepended to every array name (``"piece0/"``).
+
+    Returns
+    -------
+    FamilyFit
+    """
+    rng_ = spec.ranges if ranges is None else ranges
+    ok = np.all(np.isfinite(y), axis=1)
+    x, y = x[ok], y[ok]
+    z = standardise(x, rng_)
+    recs = [stieltjes(z[:, j], None, config.max_degree) for j in range(z.shape[1])]
+    cand = hyperbolic_multi_indices(z.shape[1], config.max_degree, config.q_norm)
+    counts = graded_counts(cand, config.q_norm, config.max_degree)
+    psi = design_matrix(z, recs, cand)
+    arrays: dict[str, npt.NDArray[Any]] = {
+        prefix + "candidates": cand.astype(np.int16),
+        prefix + "recurrence_alpha": np.stack([r[0] for r in recs]),
+        prefix + "recurrence_beta": np.stack([r[1] for r in recs]),
+        prefix + "ranges": np.asarray(rng_, dtype=np.float64),
+    }
+    info: dict[str, dict[str, Any]] = {}
+    for j, name in enumerate(spec.outputs):
+        yt = to_output_scale(name, y[:, j])
+        point, boots = _fit_output(
+            psi,
+            yt,
+            counts,
+            config.max_degree,
+            config.n_boot,
+            _seed(config, spec.name, prefix, name),
+        )
+        sizes = np.array([b.terms.size for b in boots], dtype=np.int64)
+        key = prefix + name
+        # compact storage: term indices < 2^15; bootstrap coefficients as float32
+        # (relative rounding 6e-8, far below the replicate spread; the stored
+        # values are the model, evaluated exactly as stored)
+        arrays[f"{key}/point_terms"] = point.terms.astype(np.int16)
+        arrays[f"{key}/point_coef"] = point.coef
+        arrays[f"{key}/boot_offsets"] = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int32)
+        arrays[f"{key}/boot_terms"] = np.concatenate([b.terms for b in boots]).astype(np.int16)
+        arrays[f"{key}/boot_coef"] = np.concatenate([b.coef for b in boots]).astype(np.float32)
+        arrays[f"{key}/boot_loo"] = np.array([b.loo for b in boots])
+        var_y = float(np.var(yt))
+        info[name] = {
+            "degree": point.degree,
+            "n_terms": int(point.terms.size),
+            "loo": point.loo,
+            "loo_corrected": point.loo_corrected,
+            "boot_n_terms_median": float(np.median(sizes)),
+            "sd_fitted_scale": float(np.sqrt(np.sum(point.coef[point.terms != 0] ** 2))),
+            "sd_design": var_y**0.5,
+            "n_runs": int(ok.sum()),
+        }
+    return FamilyFit(arrays, info)
+
+
+def _config_digest(spec: FamilySpec, config: BuildConfig, checks: Mapping[str, str]) -> str:
+    blob = json.dumps(
+        {
+            "config": asdict(config),
+            "family": {
+                "name": spec.name,
+                "ranges": spec.ranges,
+                "outputs": spec.outputs,
+                "belted": spec.belted,
+                "airbag": spec.airbag_deployed,
+            },
+            "checks": dict(checks),
+            "format": FORMAT_VERSION,
+            "transforms": {
+                "logit_clip": LOGIT_CLIP,
+                "floors": MEASURE_FLOORS,
+                "log_inputs": LOG_INPUTS,
+            },
+        },
+        sort_keys=True,
+    )
+    return hashlib.sha256(blob.encode()).hexdigest()
+
+
+def _checks() -> dict[str, str]:
+    from models.lpm.fingerprint import lpm_code_sha256
+    from models.lpm.params import load_parameter_set
+
+    ps = load_parameter_set()
+    lpm_code_sha256.cache_clear()  # the code may have changed since the last call
+    return {
+        "lpm_code_sha256": lpm_code_sha256(),
+        "parameter_set": ps.name,
+        "parameter_set_sha256": ps.sha256,
+        "engine_version": ENGINE_VERSION,
+    }
+
+
+def _heldout_metrics(spec: FamilySpec, y_true: FloatArray, y_pred: FloatArray) -> dict[str, Any]:
+    ok = np.all(np.isfinite(y_true), axis=1)
+    yt, yp = y_true[ok], y_pred[ok]
+    out: dict[str, Any] = {"n": int(ok.sum())}
+    for j, name in enumerate(spec.outputs):
+        a, b = yt[:, j], yp[:, j]
+        if name in ("p_iss15", "iss"):
+            err = np.abs(b - a)
+            out[name] = {"median_abs_error": float(np.median(err))}
+        else:
+            rel = np.abs(b - a) / np.maximum(np.abs(a), 1e-12)
+            out[name] = {
+                "median_rel_error": float(np.median(rel)),
+                "p90_rel_error": float(np.quantile(rel, 0.9)),
+            }
+        ss = float(np.sum((a - a.mean()) ** 2))
+        out[name]["r2"] = float(1.0 - np.sum((b - a) ** 2) / ss) if ss > 0 else 1.0
+    jp = spec.outputs.index("p_iss15")
+    ji = spec.outputs.index("iss")
+    thr = ISS15_DECISION_PROBABILITY
+    out["decision_agreement_p"] = float(np.mean((yt[:, jp] >= thr) == (yp[:, jp] >= thr)))
+    out["decision_agreement_iss"] = float(np.mean((yt[:, ji] >= 15) == (yp[:, ji] >= 15)))
+    out["iss15_share_lpm"] = float(np.mean(yt[:, ji] >= 15))
+    return out
+
+
+def build_family(spec: FamilySpec, directory: Path, config: BuildConfig) -> dict[str, Any]:
+    """Run the LPM on the design, fit, and write ``<directory>/<family>.npz``.
+
+    Returns
+    -------
+    dict
+        Timings (s) and the artifact's metadata.
+    """
+    from threadpoolctl import threadpool_limits  # type: ignore[import-untyped]
+
+    from models.lpm.simulate import warm_up
+    from models.surrogate.evaluate import SurrogateFamily
+
+    with threadpool_limits(limits=1):
+        t0 = time.perf_counter()
+        warm_up()
+        checks = _checks()
+        lo = np.array([r[0] for r in spec.ranges])
+        hi = np.array([r[1] for r in spec.ranges])
+        arrays: dict[str, npt.NDArray[Any]] = {}
+        pieces: list[dict[str, Any]] = []
+        n_failed = 0
+        t_lpm = t_fit = 0.0
+        edges = config.delta_v_pieces_kmh
+        for k, pr in enumerate(piece_ranges(spec.ranges, edges)):
+            ta = time.perf_counter()
+            u = latin_hypercube(config.n_train, lo.size, _seed(config, spec.name, f"design{k}"))
+            x = from_unit(2.0 * u - 1.0, pr)
+            y, status = lpm_outputs(spec, x)
+            tb = time.perf_counter()
+            fam = fit_family(spec, x, y, config, pr, prefix=f"piece{k}/")
+            t_lpm += tb - ta
+            t_fit += time.perf_counter() - tb
+            n_failed += int(np.sum(status < 0))
+            arrays.update(fam.arrays)
+            arrays[f"piece{k}/design_x"] = x
+            arrays[f"piece{k}/design_y"] = y
+            pieces.append(
+                {
+                    "delta_v_kmh": [edges[k], edges[k + 1]],
+                    "design_ranges": [list(r) for r in pr],
+                    "fits": fam.outputs,
+                }
+            )
+        ta = time.perf_counter()
+        xh = lo + (hi - lo) * _seed(config, spec.name, "holdout").random(
+            (config.n_holdout, lo.size)
+        )
+        yh, status_h = lpm_outputs(spec, xh)
+        t_lpm += time.perf_counter() - ta
+        n_failed += int(np.sum(status_h < 0))
+        meta: dict[str, Any] = {
+            "format_version": FORMAT_VERSION,
+            "family": spec.name,
+            "mode": spec.mode.value,
+            "body": spec.body.value,
+            "belted": spec.belted,
+            "airbag_deployed": spec.airbag_deployed,
+            "inputs": [
+                {"name": n, "low": r[0], "high": r[1]}
+                for n, r in zip(INPUT_NAMES, spec.ranges, strict=True)
+            ],
+            "standardisation": "z = 2 (x - low) / (high - low) - 1",
+            "basis": "aPCE: per-input orthonormal three-term recurrence of the design's "
+            "empirical distribution (discretised Stieltjes) on z; hyperbolic multi-indices",
+            "outputs": list(spec.outputs),
+            "output_scale": {
+                n: ("logit" if n == "p_iss15" else "identity" if n == "iss" else "log(x + floor)")
+                for n in spec.outputs
+            },
+            "delta_v_pieces_kmh": list(edges),
+            "pieces": pieces,
+            "config": asdict(config),
+            "config_sha256": _config_digest(spec, config, checks),
+            "n_failed_runs": n_failed,
+            "library_versions": {
+                "numpy": np.__version__,
+                "python": platform.python_version(),
+            },
+            **checks,
+        }
+        arrays["heldout_x"] = xh
+        arrays["heldout_y"] = yh
+        # timings vary run to run: kept out of the artifact bytes
+        timing = {"lpm_seconds": t_lpm, "fit_seconds": t_fit}
+        surrogate = SurrogateFamily.from_arrays(arrays, meta)
+        meta["heldout"] = _heldout_metrics(spec, yh, surrogate.predict(xh))
+        directory.mkdir(parents=True, exist_ok=True)
+        write_artifact(directory / f"{spec.name}.npz", arrays, meta)
+    return {"family": spec.name, **timing, "total_seconds": time.perf_counter() - t0}
+
+
+def is_current(
+    path: Path, spec: FamilySpec, config: BuildConfig, checks: Mapping[str, str] | None = None
+) -> bool:
+    """Whether the artifact at `path` was built with this configuration and LPM code.
+
+    Compares the recorded digest of (configuration, family, LPM code and
+    parameter-set checksums, engine version, format version).
+    """
+    if checks is None:
+        checks = _checks()
+    if not path.exists():
+        return False
+    try:
+        _, meta = read_artifact(path)
+    except ValueError:
+        return False
+    return bool(meta.get("config_sha256") == _config_digest(spec, config, checks))
+
+
+def write_manifest(directory: Path, config: BuildConfig) -> dict[str, Any]:
+    """Write ``manifest.json``: library identity, checks and each file's SHA-256."""
+    checks = _checks()
+    files = {p.name: sha256_file(p) for p in sorted(directory.glob("*.npz"))}
+    manifest = {
+        "name": "lpm-pce-surrogates",
+        "version": f"{FORMAT_VERSION}.{ENGINE_VERSION}",
+        "format_version": FORMAT_VERSION,
+        "seed": config.seed,
+        "config": asdict(config),
+        "families": sorted(f[:-4] for f in files),
+        "files": files,
+        **checks,
+    }
+    write_json(directory / MANIFEST_NAME, manifest)
+    return manifest
+
+
+def _worker_init() -> None:
+    os.environ.setdefault("OMP_NUM_THREADS", "1")
+    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Command line: build (or rebuild) the surrogate families.
+
+    ``--family NAME`` (repeatable) rebuilds only those families; without it,
+    the families whose artifact is missing or records another configuration
+    or other LPM checksums are built and the others skipped (resumable);
+    ``--force`` rebuilds all; ``--workers N`` processes (default: CPU count);
+    ``--out DIR`` (default: the shipped artifact directory); ``--n-train``,
+    ``--n-holdout``, ``--n-boot``, ``--seed`` override the configuration;
+    ``--no-report`` skips REPORT.md and the plots.
+
+    Returns
+    -------
+    int
+        0 on success, 1 when the LPM code or parameters changed during the
+        build (stale families; rerun), 2 on an unknown family name.
+    """
+    from tqdm import tqdm
+
+    from models.surrogate.evaluate import default_artifact_dir
+
+    ap = argparse.ArgumentParser(
+        prog="aacn-triage build-surrogates", description=__doc__.split("\n")[0]
+    )
+    ap.add_argument(
+        "--family", action="append", default=[], help="rebuild this family (repeatable)"
+    )
+    ap.add_argument("--force", action="store_true", help="rebuild every family")
+    ap.add_argument("--workers", type=int, default=os.cpu_count() or 1)
+    ap.add_argument("--out", type=Path, default=None)
+    d = default_config()
+    ap.add_argument("--n-train", type=int, default=d.n_train)
+    ap.add_argument("--n-holdout", type=int, default=d.n_holdout)
+    ap.add_argument("--n-boot", type=int, default=d.n_boot)
+    ap.add_argument("--seed", type=int, default=d.seed)
+    ap.add_argument("--no-report", action="store_true")
+    args = ap.parse_args(list(argv) if argv is not None else None)
+    config = replace(
+        d, n_train=args.n_train, n_holdout=args.n_holdout, n_boot=args.n_boot, seed=args.seed
+    )
+    directory: Path = args.out or default_artifact_dir()
+    directory.mkdir(parents=True, exist_ok=True)
+    names = {s.name: s for s in FAMILIES}
+    unknown = [f for f in args.family if f not in names]
+    if unknown:
+        sys.stderr.write(f"unknown family {unknown}; known: {', '.join(names)}\n")
+        return 2
+    checks = _checks()
+    if args.family:
+        todo = [names[f] for f in dict.fromkeys(args.family)]
+    else:
+        todo = [
+            s
+            for s in FAMILIES
+            if args.force or not is_current(directory / f"{s.name}.npz", s, config, checks)
+        ]
+    skipped = len(FAMILIES) - len(todo)
+    t0 = time.perf_counter()
+    results: list[dict[str, Any]] = []
+    with tqdm(total=len(todo), desc="surrogate families", unit="family", file=sys.stderr) as bar:
+        if skipped:
+            bar.write(f"{skipped} families current, skipped")
+        if args.workers <= 1:
+            for s in todo:
+                results.append(build_family(s, directory, config))
+                bar.update(1)
+        else:
+            _worker_init_env()
+            with ProcessPoolExecutor(max_workers=args.workers, initializer=_worker_init) as ex:
+                futs = [ex.submit(build_family, s, directory, config) for s in todo]
+                for fut in as_completed(futs):
+                    results.append(fut.result())
+                    bar.update(1)
+    total = time.perf_counter() - t0
+    stale = [
+        s.name
+        for s in FAMILIES
+        if (directory / f"{s.name}.npz").exists()
+        and not is_current(directory / f"{s.name}.npz", s, config)
+    ]
+    if stale and not args.family:
+        # the LPM code or parameters changed while building: rerun to rebuild those
+        sys.stderr.write(
+            "LPM code or parameter set changed during the build; stale families: "
+            + ", ".join(stale)
+            + "\nrerun the build (it resumes and rebuilds only those)\n"
+        )
+        return 1
+    manifest = write_manifest(directory, config)
+    # build timings are machine-dependent: a side file, not part of the manifest.
+    # "total_seconds" is the last build that built every family; per-family
+    # entries are those of the latest build of each family.
+    tpath = directory.parent / "build_timings.json"
+    try:
+        timings: dict[str, Any] = json.loads(tpath.read_text()) if tpath.exists() else {}
+    except ValueError:
+        timings = {}
+    timings.setdefault("families", {}).update({r["family"]: r for r in results})
+    if len(results) == len(FAMILIES):
+        timings["total_seconds"] = total
+        timings["workers"] = args.workers
+    if results:
+        write_json(tpath, timings)
+    if not args.no_report:
+        from models.surrogate.report import write_report
+
+        t_rep = time.perf_counter()
+        write_report(directory, directory.parent)
+        if results:
+            timings["report_seconds"] = time.perf_counter() - t_rep
+            write_json(tpath, timings)
+    sys.stderr.write(
+        f"built {len(results)} families in {total:.1f} s; manifest {manifest['version']}\n"
+    )
+    return 0
+
+
+def _worker_init_env() -> None:
+    # children inherit the environment: single-threaded BLAS in every worker
+    for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
+        os.environ.setdefault(var, "1")
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

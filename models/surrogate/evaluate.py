@@ -1,0 +1,638 @@
+"""Request-path evaluation of the PCE surrogates (numpy only, no chaospy).
+
+:meth:`SurrogateLibrary.load` reads and verifies the artifacts once;
+:meth:`SurrogateFamily.propagate` turns the occupant sensor uncertainty into
+95% intervals in about a millisecond, with all bootstrap replicates.
+
+Propagation (reference paper section 2.5; issue 5)
+----------------------------------------------------
+* Sensor errors: posture and seat track readings are Gaussian with the given
+  standard deviations (service default: 5 deg and 50 mm at 95%, i.e.
+  ``5 / 1.96``), clipped to the model domain. A FIXED sample set of
+  :data:`N_SENSOR_SAMPLES` standard-normal pairs (a Fibonacci lattice through
+  the Box-Muller map: deterministic, low discrepancy) is used, so the same
+  call always gives bit-identical output.
+* Delta-V, |angle from the mode axis| and pulse duration are taken as given
+  (clamped to the design ranges; :attr:`UncertaintyResult.clamped_inputs`).
+* P(ISS >= 15): the point value is the mean of the point PCE over the sensor
+  distribution; its 95% interval the 2.5 and 97.5 percentiles of the same mean
+  over the bootstrap replicates (model-adequacy uncertainty of the surrogate).
+* Measures and ISS: the point value is the point PCE at the (clamped) readings;
+  the 95% interval the 2.5 and 97.5 percentiles (order statistics, "inverted
+  CDF") over all sensor samples and all bootstrap replicates (sensor and
+  surrogate uncertainty together).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from types import MappingProxyType
+from typing import Any, Final
+
+import numpy as np
+import numpy.typing as npt
+
+from models.impact_mode import ImpactMode
+from models.notification import Body
+from models.surrogate.basis import design_matrix, evaluate_univariate
+from models.surrogate.spec import (
+    FAMILIES,
+    INPUT_NAMES,
+    family_name,
+    from_output_scale,
+    to_unit,
+)
+from models.surrogate.store import MANIFEST_NAME, read_artifact, sha256_file
+
+__all__ = [
+    "DEFAULT_POSTURE_SD_DEG",
+    "DEFAULT_SEAT_TRACK_SD_MM",
+    "N_SENSOR_SAMPLES",
+    "SurrogateFamily",
+    "SurrogateLibrary",
+    "UncertaintyResult",
+    "default_artifact_dir",
+]
+
+FloatArray = npt.NDArray[np.float64]
+IntArray = npt.NDArray[np.int64]
+
+#: z of a two-sided 95% Gaussian interval.
+_Z95: Final[float] = 1.959963984540054
+#: Default posture sensor standard deviation, deg: error within 5 deg 95% of the
+#: time, Gaussian (reference paper section 2.5; issue 5).
+DEFAULT_POSTURE_SD_DEG: Final[float] = 5.0 / _Z95
+#: Default seat track sensor standard deviation, mm: within 5 cm 95% of the time.
+DEFAULT_SEAT_TRACK_SD_MM: Final[float] = 50.0 / _Z95
+#: Size of the fixed sensor sample set (a 2-D Fibonacci lattice). [R] Chosen
+#: for the 5 ms budget per occupant (benchmarks/bench_surrogate.py); the
+#: coverage checks compare with LPM runs at the same points.
+N_SENSOR_SAMPLES: Final[int] = 96
+#: Percentiles of a 95% interval.
+_PCT: Final[tuple[float, float]] = (2.5, 97.5)
+_POSTURE, _SEAT = 2, 3  # columns of the sensor inputs in INPUT_NAMES
+
+
+def default_artifact_dir() -> Path:
+    """``models/surrogate/artifacts`` of this package."""
+    return Path(__file__).resolve().parent / "artifacts"
+
+
+def _sensor_normals(n: int) -> FloatArray:
+    """Deterministic standard-normal pairs: Fibonacci lattice + Box-Muller, shape (n, 2)."""
+    i = np.arange(n, dtype=np.float64)
+    u1 = (i + 0.5) / n
+    u2 = np.mod(i * (math.sqrt(5.0) - 1.0) / 2.0 + 0.5 / n, 1.0)
+    r = np.sqrt(-2.0 * np.log(u1))
+    return np.stack([r * np.cos(2.0 * np.pi * u2), r * np.sin(2.0 * np.pi * u2)], axis=1)
+
+
+_NORMALS: Final[FloatArray] = _sensor_normals(N_SENSOR_SAMPLES)
+_NORMALS.flags.writeable = False
+
+
+@dataclass(frozen=True)
+class UncertaintyResult:
+    """Surrogate answer for one occupant with 95% intervals.
+
+    Attributes
+    ----------
+    p_iss15 : float
+        P(ISS >= 15) averaged over the sensor errors.
+    p_iss15_ci95 : (float, float)
+        Bootstrap 95% interval of that probability.
+    iss : float
+        ISS of the point PCE at the readings (continuous surrogate of an integer score).
+    iss_ci95 : (float, float)
+    measures : Mapping[str, float]
+        Each measure the mode computes at the readings (units in the names;
+        HIC15 and Nij dimensionless).
+    measures_ci95 : Mapping[str, (float, float)]
+    n_samples : int
+        Sensor samples per replicate.
+    n_bootstrap : int
+        Bootstrap replicates used.
+    clamped_inputs : tuple of str
+        Inputs that were outside the design range and clamped to it
+        (delta-V above 120 km/h: the result is a lower bound).
+    """
+
+    p_iss15: float
+    p_iss15_ci95: tuple[float, float]
+    iss: float
+    iss_ci95: tuple[float, float]
+    measures: Mapping[str, float]
+    measures_ci95: Mapping[str, tuple[float, float]]
+    n_samples: int
+    n_bootstrap: int
+    clamped_inputs: tuple[str, ...] = field(default=())
+
+
+class _Piece:
+    """Point and bootstrap PCEs of every output on one delta-V piece (immutable)."""
+
+    __slots__ = (
+        "_agg_starts",
+        "_coef_t",
+        "_hi",
+        "_lo",
+        "_maxdeg",
+        "_nb1",
+        "_pairs",
+        "_ranges",
+        "_recs",
+        "_terms",
+        "outputs",
+    )
+
+    outputs: tuple[str, ...]
+    _agg_starts: IntArray
+    _coef_t: FloatArray
+    _nb1: int
+    _hi: FloatArray
+    _lo: FloatArray
+    _maxdeg: int
+    _pairs: IntArray
+    _ranges: tuple[tuple[float, float], ...]
+    _recs: tuple[tuple[FloatArray, FloatArray], ...]
+    _terms: IntArray
+
+    def __setattr__(self, key: str, value: object) -> None:
+        raise AttributeError(f"surrogate pieces are immutable ({key})")
+
+    def __init__(
+        self, arrays: Mapping[str, npt.NDArray[Any]], outputs: tuple[str, ...], prefix: str
+    ) -> None:
+        cand = np.asarray(arrays[prefix + "candidates"], dtype=np.int64)
+        alpha = np.asarray(arrays[prefix + "recurrence_alpha"], dtype=np.float64)
+        beta = np.asarray(arrays[prefix + "recurrence_beta"], dtype=np.float64)
+        rr = np.asarray(arrays[prefix + "ranges"], dtype=np.float64)
+        point = [
+            (
+                np.asarray(arrays[f"{prefix}{o}/point_terms"], dtype=np.int64),
+                np.asarray(arrays[f"{prefix}{o}/point_coef"], dtype=np.float64),
+            )
+            for o in outputs
+        ]
+        boots = [
+            (
+                np.asarray(arrays[f"{prefix}{o}/boot_offsets"], dtype=np.int64),
+                np.asarray(arrays[f"{prefix}{o}/boot_terms"], dtype=np.int64),
+                np.asarray(arrays[f"{prefix}{o}/boot_coef"], dtype=np.float64),
+            )
+            for o in outputs
+        ]
+        if rr.shape != (len(INPUT_NAMES), 2) or cand.shape[1] != len(INPUT_NAMES):
+            raise ValueError(f"{prefix}: unexpected input dimensions")
+        n_boot = {b[0].size - 1 for b in boots}
+        if len(n_boot) != 1:
+            raise ValueError(f"{prefix}: outputs differ in bootstrap size")
+        nb = n_boot.pop()
+        used = np.unique(np.concatenate([p[0] for p in point] + [b[1] for b in boots]))
+        col = np.full(cand.shape[0], -1, dtype=np.int64)
+        col[used] = np.arange(used.size)
+        coef = np.zeros((len(outputs), nb + 1, used.size))
+        for k, ((pt, pc), (off, bt, bc)) in enumerate(zip(point, boots, strict=True)):
+            coef[k, 0, col[pt]] = pc
+            rows = np.repeat(np.arange(1, nb + 1), np.diff(off))
+            coef[k, rows, col[bt]] = bc
+        terms = cand[used]
+        # group the terms by their (posture, seat track) degrees: the sensor
+        # samples only vary those two inputs; terms sorted by group, and the
+        # coefficients stored as (terms, outputs x replicates) for contiguous sums
+        key = terms[:, _POSTURE] * (int(terms.max()) + 1) + terms[:, _SEAT]
+        order = np.argsort(key, kind="stable")
+        terms = np.ascontiguousarray(terms[order])
+        sk = key[order]
+        starts = np.flatnonzero(np.concatenate([[True], sk[1:] != sk[:-1]]))
+        pairs = np.ascontiguousarray(terms[starts][:, [_POSTURE, _SEAT]])
+        coef_t = np.ascontiguousarray(coef[:, :, order].reshape(-1, used.size).T)
+        for arr in (coef_t, terms, starts, pairs, alpha, beta, rr):
+            arr.flags.writeable = False
+        sa = object.__setattr__
+        sa(self, "outputs", outputs)
+        sa(self, "_nb1", nb + 1)
+        sa(self, "_lo", rr[:, 0])
+        sa(self, "_hi", rr[:, 1])
+        sa(self, "_ranges", tuple((float(a), float(b)) for a, b in rr))
+        sa(self, "_recs", tuple((alpha[j], beta[j]) for j in range(alpha.shape[0])))
+        sa(self, "_maxdeg", int(cand.max()))
+        sa(self, "_terms", terms)
+        sa(self, "_coef_t", coef_t)
+        sa(self, "_agg_starts", starts)
+        sa(self, "_pairs", pairs)
+
+    @property
+    def n_bootstrap(self) -> int:
+        return int(self._nb1 - 1)
+
+    def predict_raw(self, x: FloatArray, replicate: int) -> FloatArray:
+        """Fitted-scale outputs at raw inputs, shape (n, n_out)."""
+        psi = design_matrix(to_unit(x, self._ranges), self._recs, self._terms)
+        cols = replicate + self._nb1 * np.arange(len(self.outputs))
+        return np.asarray(psi @ self._coef_t[:, cols], dtype=np.float64)
+
+    @property
+    def delta_v_design(self) -> tuple[float, float]:
+        """Delta-V design range of the piece, km/h."""
+        return self._ranges[0]
+
+    def samples(self, xc: FloatArray, post: FloatArray, seat: FloatArray) -> FloatArray:
+        """Fitted-scale outputs, shape (n_out, B + 1, n) at fixed inputs and sensor samples."""
+        z = to_unit(xc, self._ranges)[0]
+        md = self._maxdeg
+        s = np.ones(self._terms.shape[0])
+        for j in (0, 1, 4):  # delta-V, angle, duration: one scalar factor per term
+            uni = evaluate_univariate(z[j : j + 1], self._recs[j], md)[0]
+            s *= uni[self._terms[:, j]]
+        zp = 2.0 * (post - self._lo[_POSTURE]) / (self._hi[_POSTURE] - self._lo[_POSTURE]) - 1.0
+        zs = 2.0 * (seat - self._lo[_SEAT]) / (self._hi[_SEAT] - self._lo[_SEAT]) - 1.0
+        up = evaluate_univariate(zp, self._recs[_POSTURE], md)
+        us = evaluate_univariate(zs, self._recs[_SEAT], md)
+        psi2 = np.take(up, self._pairs[:, 0], axis=1) * np.take(us, self._pairs[:, 1], axis=1)
+        c2 = np.add.reduceat(self._coef_t * s[:, None], self._agg_starts, axis=0)  # (M, O(B+1))
+        return (psi2 @ c2).T.reshape(len(self.outputs), self._nb1, -1)
+
+
+class SurrogateFamily:
+    """PCE surrogates of one mode x body x restraint family (immutable).
+
+    A family is a set of delta-V pieces (:data:`models.surrogate.spec.DELTA_V_PIECES_KMH`),
+    each with a point PCE and bootstrap replicates per output.
+    Build with :meth:`from_arrays` (or through :class:`SurrogateLibrary`).
+
+    Attributes
+    ----------
+    name : str
+    outputs : tuple of str
+        Output names (the mode's measures, ``p_iss15``, ``iss``).
+    meta : Mapping
+        The artifact's metadata (degrees, LOO, checksums, held-out errors).
+    """
+
+    __slots__ = ("_edges", "_hi", "_lo", "_pieces", "meta", "name", "outputs")
+
+    name: str
+    outputs: tuple[str, ...]
+    meta: Mapping[str, Any]
+    _edges: FloatArray
+    _hi: FloatArray
+    _lo: FloatArray
+    _pieces: tuple[_Piece, ...]
+
+    def __setattr__(self, key: str, value: object) -> None:
+        raise AttributeError(f"SurrogateFamily is immutable ({key})")
+
+    @classmethod
+    def from_arrays(
+        cls, arrays: Mapping[str, npt.NDArray[Any]], meta: Mapping[str, Any]
+    ) -> SurrogateFamily:
+        """Assemble a family from artifact arrays and metadata.
+
+        Raises
+        ------
+        ValueError
+            When members are missing or inconsistent.
+        """
+        self = cls.__new__(cls)
+        try:
+            outputs = tuple(str(o) for o in meta["outputs"])
+            inputs = meta["inputs"]
+            edges = np.asarray(meta["delta_v_pieces_kmh"], dtype=np.float64)
+            pieces = tuple(_Piece(arrays, outputs, f"piece{k}/") for k in range(edges.size - 1))
+        except KeyError as exc:
+            raise ValueError(f"{meta.get('family', '?')}: member {exc} missing") from exc
+        if [i["name"] for i in inputs] != list(INPUT_NAMES):
+            raise ValueError(f"{meta.get('family')}: unexpected inputs")
+        if len({p.n_bootstrap for p in pieces}) != 1:
+            raise ValueError(f"{meta.get('family')}: pieces differ in bootstrap size")
+        edges.flags.writeable = False
+        sa = object.__setattr__
+        sa(self, "name", str(meta["family"]))
+        sa(self, "outputs", outputs)
+        sa(self, "meta", MappingProxyType(dict(meta)))
+        sa(self, "_lo", np.array([float(i["low"]) for i in inputs]))
+        sa(self, "_hi", np.array([float(i["high"]) for i in inputs]))
+        sa(self, "_edges", edges)
+        sa(self, "_pieces", pieces)
+        return self
+
+    @property
+    def n_bootstrap(self) -> int:
+        """Number of bootstrap replicates."""
+        return self._pieces[0].n_bootstrap
+
+    @property
+    def ranges(self) -> tuple[tuple[float, float], ...]:
+        """Domain of each input of :data:`INPUT_NAMES` (units in the names)."""
+        return tuple((float(a), float(b)) for a, b in zip(self._lo, self._hi, strict=True))
+
+    def _weights(self, dv: npt.ArrayLike) -> FloatArray:
+        """Blend weights of the pieces at each delta-V, shape (n, n_pieces).
+
+        Inside a piece's own interval its weight is 1; across an edge the two
+        neighbours are blended with a smoothstep in log delta-V over the part
+        of their design ranges that overlaps (both PCEs are inside their
+        designs there), so the surrogate is continuous in delta-V.
+        """
+        v = np.log(np.atleast_1d(np.asarray(dv, dtype=np.float64)))
+        n_p = len(self._pieces)
+        k = np.clip(np.searchsorted(self._edges, np.exp(v), side="right") - 1, 0, n_p - 1)
+        w = np.zeros((v.size, n_p))
+        w[np.arange(v.size), k] = 1.0
+        for j in range(1, n_p):
+            e = math.log(float(self._edges[j]))
+            half = min(
+                e - math.log(self._pieces[j].delta_v_design[0]),
+                math.log(self._pieces[j - 1].delta_v_design[1]) - e,
+            )
+            if half <= 0.0:
+                continue
+            u = np.clip((v - (e - half)) / (2.0 * half), 0.0, 1.0)
+            zone = (u > 0.0) & (u < 1.0)
+            up = u * u * (3.0 - 2.0 * u)
+            w[zone, j - 1] = 1.0 - up[zone]
+            w[zone, j] = up[zone]
+            others = np.ones(n_p, dtype=bool)
+            others[[j - 1, j]] = False
+            w[np.ix_(zone, others)] = 0.0
+        return w
+
+    def predict(self, x: npt.ArrayLike, replicate: int = 0) -> FloatArray:
+        """Surrogate outputs at raw input points.
+
+        Parameters
+        ----------
+        x : array_like, shape (n, 5)
+            Columns of :data:`INPUT_NAMES` (km/h, deg, deg, mm, ms); the
+            angle's magnitude is used; not clamped.
+        replicate : int, optional
+            0 the point PCE, 1..n_bootstrap a bootstrap replicate.
+
+        Returns
+        -------
+        ndarray, shape (n, n_outputs)
+            Physical values of :attr:`outputs`.
+        """
+        xv = np.array(np.atleast_2d(np.asarray(x, dtype=np.float64)))
+        xv[:, 1] = np.abs(xv[:, 1])
+        raw = np.zeros((xv.shape[0], len(self.outputs)))
+        w = self._weights(xv[:, 0])
+        for i, piece in enumerate(self._pieces):
+            rows = w[:, i] > 0.0
+            if np.any(rows):
+                raw[rows] += w[rows, i, None] * piece.predict_raw(xv[rows], replicate)
+        return np.stack(
+            [from_output_scale(o, raw[:, k]) for k, o in enumerate(self.outputs)], axis=1
+        )
+
+    def propagate(
+        self,
+        *,
+        delta_v_kmh: float,
+        angle_deg: float,
+        posture_deg: float,
+        seat_track_mm: float,
+        duration_ms: float,
+        posture_sd_deg: float = DEFAULT_POSTURE_SD_DEG,
+        seat_track_sd_mm: float = DEFAULT_SEAT_TRACK_SD_MM,
+    ) -> UncertaintyResult:
+        """Propagate Gaussian sensor errors through the point and bootstrap PCEs.
+
+        Parameters
+        ----------
+        delta_v_kmh : float
+            Resultant delta-V, km/h.
+        angle_deg : float
+            Signed PDOF - mode axis, deg (its magnitude is used).
+        posture_deg : float
+            Lumbar flexion reading, deg.
+        seat_track_mm : float
+            Seat track reading, mm forward of mid track.
+        duration_ms : float
+            Haversine duration T, ms.
+        posture_sd_deg, seat_track_sd_mm : float, optional
+            Sensor standard deviations (deg, mm); 0 gives a point input.
+
+        Returns
+        -------
+        UncertaintyResult
+
+        Raises
+        ------
+        ValueError
+            Non-finite inputs or negative standard deviations.
+        """
+        vals = (delta_v_kmh, angle_deg, posture_deg, seat_track_mm, duration_ms)
+        if not all(math.isfinite(v) for v in vals):
+            raise ValueError("propagate: inputs must be finite")
+        if not (posture_sd_deg >= 0.0 and seat_track_sd_mm >= 0.0):
+            raise ValueError("propagate: standard deviations must be >= 0")
+        x = np.array([delta_v_kmh, abs(angle_deg), posture_deg, seat_track_mm, duration_ms])
+        xc = np.clip(x, self._lo, self._hi)
+        clamped = tuple(
+            n
+            for n, a, b in zip(INPUT_NAMES, x, xc, strict=True)
+            if abs(a - b) > 1e-9 * (1.0 + abs(a))
+        )
+        # sensor samples, clipped to the domain; row 0 is the reading itself
+        post = np.empty(N_SENSOR_SAMPLES + 1)
+        seat = np.empty(N_SENSOR_SAMPLES + 1)
+        post[0], seat[0] = xc[_POSTURE], xc[_SEAT]
+        post[1:] = np.clip(
+            xc[_POSTURE] + posture_sd_deg * _NORMALS[:, 0], self._lo[_POSTURE], self._hi[_POSTURE]
+        )
+        seat[1:] = np.clip(
+            xc[_SEAT] + seat_track_sd_mm * _NORMALS[:, 1], self._lo[_SEAT], self._hi[_SEAT]
+        )
+        w = self._weights(xc[0])[0]
+        parts = [
+            w[i] * self._pieces[int(i)].samples(xc[None, :], post, seat)
+            for i in np.flatnonzero(w > 0.0)
+        ]
+        raw: FloatArray = parts[0] if len(parts) == 1 else parts[0] + parts[1]
+        measures: dict[str, float] = {}
+        cis: dict[str, tuple[float, float]] = {}
+        n_out, nb1 = int(raw.shape[0]), int(raw.shape[1])
+        # 95% intervals of measures and ISS: order statistics of the pooled
+        # (replicates x samples) values on the fitted scale, then transformed
+        # (the transforms are monotone, so this equals transforming first)
+        pooled = raw[:, 1:, 1:].reshape(n_out, -1)
+        n = pooled.shape[1]
+        k_lo = max(math.ceil(_PCT[0] / 100.0 * n) - 1, 0)
+        k_hi = max(math.ceil(_PCT[1] / 100.0 * n) - 1, 0)
+        part = np.partition(pooled, (k_lo, k_hi), axis=1)
+        p = iss = 0.0
+        p_ci = iss_ci = (0.0, 0.0)
+        for k, name in enumerate(self.outputs):
+            if name == "p_iss15":
+                means = from_output_scale(name, raw[k, :, 1:]).mean(axis=1)
+                p = float(means[0])
+                lo, hi = np.percentile(means[1:], _PCT)
+                p_ci = (float(lo), float(hi))
+                continue
+            point = float(from_output_scale(name, raw[k, 0, 0]))
+            lo, hi = (float(v) for v in from_output_scale(name, part[k, [k_lo, k_hi]]))
+            if name == "iss":
+                iss, iss_ci = point, (lo, hi)
+            else:
+                measures[name] = point
+                cis[name] = (lo, hi)
+        return UncertaintyResult(
+            p_iss15=p,
+            p_iss15_ci95=p_ci,
+            iss=iss,
+            iss_ci95=iss_ci,
+            measures=MappingProxyType(measures),
+            measures_ci95=MappingProxyType(cis),
+            n_samples=N_SENSOR_SAMPLES,
+            n_bootstrap=nb1 - 1,
+            clamped_inputs=clamped,
+        )
+
+
+class SurrogateLibrary:
+    """The verified set of surrogate families (immutable).
+
+    Attributes
+    ----------
+    name, version : str
+        From the manifest.
+    sha256 : str
+        SHA-256 of ``manifest.json``.
+    lpm_code_sha256, parameter_set_sha256 : str
+        Checksums of the LPM code and parameter set the families were built from.
+    engine_version : str
+    """
+
+    __slots__ = (
+        "_families",
+        "directory",
+        "engine_version",
+        "lpm_code_sha256",
+        "manifest",
+        "name",
+        "parameter_set_sha256",
+        "sha256",
+        "version",
+    )
+
+    name: str
+    version: str
+    sha256: str
+    lpm_code_sha256: str
+    parameter_set_sha256: str
+    engine_version: str
+    directory: Path
+    manifest: Mapping[str, Any]
+    _families: Mapping[str, SurrogateFamily]
+
+    def __setattr__(self, key: str, value: object) -> None:
+        if hasattr(self, key):
+            raise AttributeError(f"SurrogateLibrary is immutable ({key})")
+        object.__setattr__(self, key, value)
+
+    @classmethod
+    def load(cls, directory: Path | None = None, *, require_all: bool = True) -> SurrogateLibrary:
+        """Load and verify the artifacts of `directory` (default: the shipped ones).
+
+        Parameters
+        ----------
+        directory : Path, optional
+        require_all : bool, optional
+            Require every family of :data:`models.surrogate.spec.FAMILIES`
+            (False for partial test libraries).
+
+        Raises
+        ------
+        ValueError
+            With the reason: manifest missing or malformed, a file missing, a
+            checksum mismatch, an artifact recording other LPM checksums than
+            the manifest, or (``require_all``) a family missing.
+        """
+        d = default_artifact_dir() if directory is None else Path(directory)
+        mpath = d / MANIFEST_NAME
+        if not mpath.is_file():
+            raise ValueError(f"surrogate manifest missing: {mpath}")
+        try:
+            manifest = json.loads(mpath.read_bytes())
+            files: dict[str, str] = dict(manifest["files"])
+            keys = ("name", "version", "lpm_code_sha256", "parameter_set_sha256", "engine_version")
+            ident = {k: str(manifest[k]) for k in keys}
+        except (ValueError, KeyError, TypeError) as exc:
+            raise ValueError(f"surrogate manifest malformed: {exc}") from exc
+        families: dict[str, SurrogateFamily] = {}
+        for fname, digest in sorted(files.items()):
+            path = d / fname
+            if not path.is_file():
+                raise ValueError(f"surrogate artifact missing: {fname}")
+            actual = sha256_file(path)
+            if actual != digest:
+                raise ValueError(
+                    f"surrogate artifact checksum mismatch: {fname} "
+                    f"(manifest {digest[:12]}..., file {actual[:12]}...)"
+                )
+            arrays, meta = read_artifact(path)
+            for k in ("lpm_code_sha256", "parameter_set_sha256", "engine_version"):
+                if str(meta.get(k)) != ident[k]:
+                    raise ValueError(f"surrogate artifact {fname}: {k} differs from the manifest")
+            fam = SurrogateFamily.from_arrays(arrays, meta)
+            families[fam.name] = fam
+        if require_all:
+            missing = [s.name for s in FAMILIES if s.name not in families]
+            if missing:
+                raise ValueError(f"surrogate families missing: {', '.join(missing)}")
+        self = cls.__new__(cls)
+        for k, v in ident.items():
+            object.__setattr__(self, k, v)
+        object.__setattr__(self, "sha256", sha256_file(mpath))
+        object.__setattr__(self, "directory", d)
+        object.__setattr__(self, "manifest", MappingProxyType(manifest))
+        object.__setattr__(self, "_families", MappingProxyType(families))
+        return self
+
+    def families(self) -> Mapping[str, SurrogateFamily]:
+        """Every loaded family by name (read-only mapping)."""
+        return self._families
+
+    @property
+    def family_names(self) -> tuple[str, ...]:
+        """Names of the loaded families."""
+        return tuple(sorted(self._families))
+
+    def family(
+        self, mode: ImpactMode, body: Body, belted: bool, airbag_deployed: bool
+    ) -> SurrogateFamily:
+        """The family for a mode, body and restraint configuration.
+
+        Rear and side families serve both airbag states (the frontal airbag does
+        not act in those LPMs; see :mod:`models.surrogate.spec`).
+
+        Raises
+        ------
+        KeyError
+            When the family is not in the library.
+        """
+        mode = ImpactMode(mode)
+        bag: bool | None = bool(airbag_deployed) if mode is ImpactMode.FRONTAL else None
+        return self._families[family_name(mode, Body(body), bool(belted), bag)]
+
+    def stale_reason(self) -> str | None:
+        """Why the library does not match the current LPM code and parameters, or None."""
+        from models import ENGINE_VERSION
+        from models.lpm.fingerprint import lpm_code_sha256
+        from models.lpm.params import load_parameter_set
+
+        if self.lpm_code_sha256 != lpm_code_sha256():
+            return "surrogates were built from other LPM code (lpm_code_sha256 differs)"
+        if self.parameter_set_sha256 != load_parameter_set().sha256:
+            return "surrogates were built from another LPM parameter set (sha256 differs)"
+        if self.engine_version != ENGINE_VERSION:
+            return (
+                f"surrogates were built by engine {self.engine_version}, running {ENGINE_VERSION}"
+            )
+        return None

@@ -1,0 +1,438 @@
+"""Build report: ``REPORT.md`` and PNG plots (matplotlib, Agg), like the paper's Table 2 / Figure 8.
+
+Per family: degrees and LOO of every output and delta-V piece, the standard
+deviation of each output under the default sensor errors at a nominal crash,
+held-out errors against direct LPM runs (median relative error per measure,
+ISS15+ decision agreement), a surrogate-vs-LPM scatter per mode and a
+Figure-8-like plot of P(ISS >= 15) against delta-V with its bootstrap band.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
+
+from models.impact_mode import ImpactMode
+from models.surrogate.evaluate import N_SENSOR_SAMPLES, SurrogateFamily, SurrogateLibrary
+from models.surrogate.spec import FAMILIES, LOGIT_CLIP, P_RESOLUTION
+
+__all__ = ["COVERAGE_SEED", "NOMINAL", "coverage_check", "write_report"]
+
+#: Seed of the coverage cases drawn by :func:`coverage_check`.
+COVERAGE_SEED = 5
+
+#: Nominal crash of the table's standard deviations: delta-V (km/h), |angle|
+#: (deg), posture (deg, neutral 5.8), seat track (mm), duration (ms).
+NOMINAL = {
+    "delta_v_kmh": 50.0,
+    "angle_deg": 0.0,
+    "posture_deg": 5.8,
+    "seat_track_mm": 0.0,
+    "duration_ms": 90.0,
+}
+
+
+def _sd_under_sensor_error(fam: SurrogateFamily) -> dict[str, float]:
+    """Standard deviation of each output over the sensor samples (point PCE)."""
+    from models.surrogate.evaluate import (
+        _NORMALS,
+        DEFAULT_POSTURE_SD_DEG,
+        DEFAULT_SEAT_TRACK_SD_MM,
+    )
+
+    n = _NORMALS.shape[0]
+    x = np.tile([NOMINAL[k] for k in NOMINAL], (n, 1))
+    x[:, 2] = np.clip(x[:, 2] + DEFAULT_POSTURE_SD_DEG * _NORMALS[:, 0], 0.0, 25.0)
+    x[:, 3] = np.clip(x[:, 3] + DEFAULT_SEAT_TRACK_SD_MM * _NORMALS[:, 1], -120.0, 120.0)
+    y = fam.predict(x)
+    return {o: float(np.std(y[:, k])) for k, o in enumerate(fam.outputs)}
+
+
+def coverage_check(
+    lib: SurrogateLibrary, n_cases: int, seed: int = COVERAGE_SEED
+) -> list[dict[str, Any]]:
+    """Does the 95% interval of P(ISS >= 15) contain the Monte Carlo value?
+
+    Cases: random families and random in-domain readings (seeded); the known
+    input distribution is the default Gaussian sensor error around the
+    readings (clipped to the domain). The Monte Carlo value is the mean
+    P(ISS >= 15) of direct LPM runs at the fixed sensor sample points; it counts
+    as inside when within :data:`P_RESOLUTION` of the interval.
+
+    Returns
+    -------
+    list of dict
+        One row per case: family, inputs, interval, Monte Carlo value, hit.
+    """
+    from models.surrogate.build import lpm_outputs
+    from models.surrogate.evaluate import (
+        _NORMALS,
+        DEFAULT_POSTURE_SD_DEG,
+        DEFAULT_SEAT_TRACK_SD_MM,
+    )
+
+    specs = {s.name: s for s in FAMILIES}
+    names = [n for n in lib.family_names if n in specs]
+    rng = np.random.default_rng(seed)
+    rows: list[dict[str, Any]] = []
+    for _ in range(n_cases):
+        name = names[int(rng.integers(len(names)))]
+        fam = lib.families()[name]
+        lo = np.array([r[0] for r in fam.ranges])
+        hi = np.array([r[1] for r in fam.ranges])
+        x0 = lo + (hi - lo) * rng.random(lo.size)
+        r = fam.propagate(
+            delta_v_kmh=float(x0[0]),
+            angle_deg=float(x0[1]),
+            posture_deg=float(x0[2]),
+            seat_track_mm=float(x0[3]),
+            duration_ms=float(x0[4]),
+        )
+        x = np.tile(x0, (_NORMALS.shape[0], 1))
+        x[:, 2] = np.clip(x0[2] + DEFAULT_POSTURE_SD_DEG * _NORMALS[:, 0], lo[2], hi[2])
+        x[:, 3] = np.clip(x0[3] + DEFAULT_SEAT_TRACK_SD_MM * _NORMALS[:, 1], lo[3], hi[3])
+        y, _ = lpm_outputs(specs[name], x)
+        mc = float(np.nanmean(y[:, specs[name].outputs.index("p_iss15")]))
+        rows.append(
+            {
+                "family": name,
+                "x": [round(float(v), 1) for v in x0],
+                "p": r.p_iss15,
+                "ci95": r.p_iss15_ci95,
+                "mc": mc,
+                "hit": bool(
+                    r.p_iss15_ci95[0] - P_RESOLUTION <= mc <= r.p_iss15_ci95[1] + P_RESOLUTION
+                ),
+            }
+        )
+    return rows
+
+
+def _fmt(v: float) -> str:
+    return f"{v:.3g}"
+
+
+def write_report(artifact_dir: Path, out_dir: Path, coverage_cases: int = 24) -> Path:
+    """Write ``REPORT.md`` and ``report_*.png`` into `out_dir` from the artifacts.
+
+    Parameters
+    ----------
+    artifact_dir : Path
+    out_dir : Path
+    coverage_cases : int, optional
+        Cases of :func:`coverage_check` (``N_SENSOR_SAMPLES`` LPM runs each; 0 skips it).
+
+    Returns
+    -------
+    Path
+        The report file.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    lib = SurrogateLibrary.load(artifact_dir, require_all=False)
+    timings: dict[str, Any] = {}
+    tpath = out_dir / "build_timings.json"
+    if tpath.exists():
+        timings = json.loads(tpath.read_text())
+    fams = [lib.families()[s.name] for s in FAMILIES if s.name in lib.family_names]
+    cfg = lib.manifest.get("config", {})
+    lines = [
+        "# PCE surrogate build report (issue 5)",
+        "",
+        f"Library `{lib.name}` version {lib.version}, manifest sha256 `{lib.sha256[:16]}...`; "
+        f"LPM code `{lib.lpm_code_sha256[:16]}...`, parameter set "
+        f"`{lib.manifest.get('parameter_set')}` `{lib.parameter_set_sha256[:16]}...`, "
+        f"engine {lib.engine_version}, seed {lib.manifest.get('seed')}.",
+        "",
+        f"Design: Latin hypercube of {cfg.get('n_train')} LPM runs per delta-V piece, pieces "
+        f"{cfg.get('delta_v_pieces_kmh')} km/h (log-scale delta-V and duration), "
+        f"{cfg.get('n_holdout')} held-out uniform points per family over the whole domain; "
+        f"hyperbolic truncation q = {cfg.get('q_norm')}, degree adaptive up to "
+        f"{cfg.get('max_degree')}; {cfg.get('n_boot')} bootstrap replicates with the LAR "
+        "selection rerun in each.",
+        "",
+    ]
+    lines += [
+        "## Design choices",
+        "",
+        "- Families: frontal x {50M, 5F} x {belted, unbelted} x {airbag, no airbag} (8); rear "
+        "and near/far side x {50M, 5F} x {belted, unbelted}, shared between airbag states "
+        "because the frontal airbag does not act in those LPMs (rear: only with an explicit "
+        "firing time, which is then outside the surrogates) (12). 20 families.",
+        "- Inputs: delta-V 5-120 km/h (above: clamped to 120 and flagged, a lower bound since "
+        "the LPMs saturate; below 5: clamped), |angle from the mode axis| within coverage "
+        "(frontal 0-30, rear 0-40, sides 0-20 deg; the planar LPMs see only the on-axis "
+        "component), posture 0-25 deg, seat track -120..120 mm, haversine duration "
+        "40-150 ms (clamped and flagged outside). Delta-V and duration on a log scale.",
+        "- Delta-V pieces: one PCE set per piece; a single PCE over 5-120 km/h left 10-16% "
+        "median error on HIC and Nij. Pieces cost build time, not request time (one piece "
+        "is evaluated per request, two blended with a smoothstep within 10% of a piece's "
+        "log width of an edge, so the surrogate is continuous in delta-V).",
+        "- Outputs: each measure as log(x + floor), P(ISS>=15) as logit (clipped at "
+        f"{LOGIT_CLIP:g}), "
+        "ISS directly (clipped to 0-75 after evaluation).",
+        "- Bootstrap: rows resampled, LAR selection and the number of terms rerun in every "
+        "replicate at the point fit's degree; rank-deficient replicates are redrawn.",
+        "",
+        "## Open items",
+        "",
+        "- Held-out median relative error above 5% (Table B): "
+        + _misses(fams)
+        + ". Causes: kinks in posture, seat track and pulse duration where contacts start "
+        "and the HIC window or Nij load case switches, mostly in the frontal LPM. "
+        "tests/surrogate holds HIC15/Nij of its test family to a 20% regression bound and "
+        "keeps the 5% check as an xfail.",
+        "- ISS15+ decision agreement (P >= 0.5) at or below 97%: " + _agreement_misses(fams) + ".",
+        "- ISS is a step function of the measures; its surrogate is a smooth approximation "
+        "(median absolute error in Table B); the ISS15+ decision uses P(ISS>=15) >= 0.5.",
+        "",
+    ]
+    if timings:
+        lines += [
+            f"Build time: {timings['total_seconds']:.0f} s with {timings['workers']} worker "
+            f"processes for {len(timings['families'])} families (see benchmarks/RESULTS.md).",
+            "",
+        ]
+    lines += [
+        "## Table A: degree and LOO per output (median over the delta-V pieces [min-max])",
+        "",
+        "| family | output | degree | LOO | terms | sd at nominal crash |",
+        "|---|---|---|---|---|---|",
+    ]
+    for fam in fams:
+        sd = _sd_under_sensor_error(fam)
+        for o in fam.outputs:
+            fits = [p["fits"][o] for p in fam.meta["pieces"]]
+            deg = [f["degree"] for f in fits]
+            loo = [f["loo"] for f in fits]
+            terms = [f["n_terms"] for f in fits]
+            lines.append(
+                f"| {fam.name} | {o} | {int(np.median(deg))} [{min(deg)}-{max(deg)}] | "
+                f"{_fmt(float(np.median(loo)))} [{_fmt(min(loo))}-{_fmt(max(loo))}] | "
+                f"{int(np.median(terms))} | {_fmt(sd[o])} |"
+            )
+    lines += [
+        "",
+        "LOO is relative to the output variance on its fitted scale (log measure, logit "
+        "P(ISS>=15), ISS). The sd column is the standard deviation of the physical output "
+        "under the default sensor errors (posture 5 deg, seat track 50 mm at 95%) at "
+        f"the nominal crash {NOMINAL} (paper Table 2 analogue).",
+        "",
+        "## Table B: held-out check against direct LPM runs",
+        "",
+        "Median relative error per measure; P(ISS>=15) and ISS as median absolute error; "
+        "ISS15+ agreement: the decision P(ISS>=15) >= 0.5 (and ISS >= 15) of the surrogate "
+        "vs the LPM.",
+        "",
+    ]
+    measures = sorted({o for f in fams for o in f.outputs if o not in ("p_iss15", "iss")})
+    lines.append(
+        "| family | n | "
+        + " | ".join(measures)
+        + " | P abs | ISS abs | agree P>=0.5 | agree ISS>=15 | LPM ISS15+ share |"
+    )
+    lines.append("|---" * (len(measures) + 7) + "|")
+    for fam in fams:
+        h = fam.meta["heldout"]
+        cells = [f"{100 * h[m]['median_rel_error']:.1f}%" if m in h else "-" for m in measures]
+        lines.append(
+            f"| {fam.name} | {h['n']} | "
+            + " | ".join(cells)
+            + f" | {h['p_iss15']['median_abs_error']:.3f} | {h['iss']['median_abs_error']:.1f}"
+            f" | {100 * h['decision_agreement_p']:.1f}% | {100 * h['decision_agreement_iss']:.1f}%"
+            f" | {100 * h['iss15_share_lpm']:.0f}% |"
+        )
+    lines += ["", "Pooled over all families:", ""]
+    lines += [f"- {k}: {v}" for k, v in _pooled(artifact_dir, fams).items()]
+    if coverage_cases:
+        cov = coverage_check(lib, coverage_cases)
+        hits = sum(c["hit"] for c in cov)
+        open_cases = [c for c in cov if 1e-3 < c["mc"] < 1.0 - 1e-3]
+        open_hits = sum(c["hit"] for c in open_cases)
+        lines += [
+            "",
+            "## Table C: coverage of the P(ISS>=15) interval",
+            "",
+            f"{hits} of {len(cov)} cases ({100 * hits / len(cov):.0f}%) have the Monte Carlo "
+            f"value (mean of {N_SENSOR_SAMPLES} direct LPM runs at the sensor sample points, "
+            "default sensor "
+            "errors around random in-domain readings) inside the bootstrap 95% interval "
+            f"(issue 5 target: >= 90%). Cases with a non-saturated Monte Carlo value "
+            f"(0.001 < P < 0.999): {open_hits} of {len(open_cases)}.",
+            "",
+            "| family | dv, angle, posture, seat, T | P surrogate | 95% interval | P Monte Carlo |"
+            " inside |",
+            "|---|---|---|---|---|---|",
+        ]
+        lines += [
+            f"| {c['family']} | {c['x']} | {c['p']:.4f} | [{c['ci95'][0]:.4f}, "
+            f"{c['ci95'][1]:.4f}] | {c['mc']:.4f} | {'yes' if c['hit'] else 'NO'} |"
+            for c in cov
+        ]
+    # plots
+    out_dir.mkdir(parents=True, exist_ok=True)
+    pngs = []
+    for mode in ImpactMode:
+        mf = [f for f in fams if f.meta["mode"] == mode.value]
+        if not mf:
+            continue
+        outs = mf[0].outputs
+        fig, axes = plt.subplots(
+            len(mf), len(outs), figsize=(2.2 * len(outs), 2.0 * len(mf)), squeeze=False
+        )
+        for i, fam in enumerate(mf):
+            xh, yh = _heldout(artifact_dir, fam)
+            yp = fam.predict(xh)
+            for j, o in enumerate(outs):
+                ax = axes[i, j]
+                ax.scatter(yh[:, j], yp[:, j], s=4, alpha=0.6)
+                lo = float(np.nanmin([yh[:, j].min(), yp[:, j].min()]))
+                hi = float(np.nanmax([yh[:, j].max(), yp[:, j].max()]))
+                ax.plot([lo, hi], [lo, hi], "k-", lw=0.6)
+                if o not in ("p_iss15", "iss") and lo > 0:
+                    ax.set_xscale("log")
+                    ax.set_yscale("log")
+                ax.tick_params(labelsize=5)
+                if i == 0:
+                    ax.set_title(o, fontsize=7)
+                if j == 0:
+                    ax.set_ylabel(fam.name.split("__", 1)[1], fontsize=5)
+        fig.suptitle(f"{mode.value}: surrogate (y) vs LPM (x), held-out points", fontsize=8)
+        fig.tight_layout()
+        name = f"report_scatter_{mode.value}.png"
+        fig.savefig(out_dir / name, dpi=110)
+        plt.close(fig)
+        pngs.append(name)
+    # Figure 8 analogue
+    fr = [f for f in fams if f.meta["mode"] == "frontal"] or fams
+    fig, axes = plt.subplots(1, min(4, len(fr)), figsize=(12, 3), squeeze=False)
+    dvs = np.linspace(5.0, 120.0, 93)
+    for ax, fam in zip(axes[0], fr[:4], strict=False):
+        pts, los, his = [], [], []
+        for dv in dvs:
+            r = fam.propagate(
+                delta_v_kmh=float(dv),
+                angle_deg=0.0,
+                posture_deg=NOMINAL["posture_deg"],
+                seat_track_mm=NOMINAL["seat_track_mm"],
+                duration_ms=NOMINAL["duration_ms"],
+            )
+            pts.append(r.p_iss15)
+            los.append(r.p_iss15_ci95[0])
+            his.append(r.p_iss15_ci95[1])
+        ax.fill_between(dvs, los, his, alpha=0.3, label="bPCE 95%")
+        ax.plot(dvs, pts, "b-", lw=1, label="aPCE")
+        dv_check, p_check = _lpm_band_points(fam)
+        ax.plot(dv_check, p_check, "ko", ms=3, label="LPM (mean over sensor samples)")
+        ax.set_title(fam.name.split("__", 1)[1], fontsize=7)
+        ax.set_xlabel("delta-V (km/h)", fontsize=7)
+        ax.set_ylabel("P(ISS>=15)", fontsize=7)
+        ax.tick_params(labelsize=6)
+        ax.legend(fontsize=6)
+    fig.tight_layout()
+    fig.savefig(out_dir / "report_p_iss15_band.png", dpi=110)
+    plt.close(fig)
+    pngs.append("report_p_iss15_band.png")
+    lines += ["", "## Plots", ""] + [f"![{p}]({p})" for p in pngs]
+    lines += [
+        "",
+        "`report_p_iss15_band.png`: P(ISS>=15) of frontal families against delta-V at the "
+        "nominal posture, seat track and 90 ms duration, with the default sensor errors; the "
+        "band is the bootstrap 95% interval, the dots the mean P(ISS>=15) of direct LPM runs "
+        "at the same sensor samples (paper Figure 8 analogue).",
+        "",
+    ]
+    path = out_dir / "REPORT.md"
+    path.write_text("\n".join(lines))
+    return path
+
+
+def _heldout(
+    artifact_dir: Path, fam: SurrogateFamily
+) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
+    from models.surrogate.store import read_artifact
+
+    arrays, _ = read_artifact(artifact_dir / f"{fam.name}.npz")
+    return np.asarray(arrays["heldout_x"]), np.asarray(arrays["heldout_y"])
+
+
+#: Delta-V values (km/h) of the direct LPM check points on the band plot.
+BAND_CHECK_DELTA_V_KMH = (10.0, 25.0, 40.0, 55.0, 70.0, 85.0, 100.0, 115.0)
+
+
+def _lpm_band_points(fam: SurrogateFamily) -> tuple[list[float], list[float]]:
+    """Mean LPM P(ISS >= 15) over the sensor samples at the band plot's nominal inputs."""
+    from models.surrogate.build import lpm_outputs
+    from models.surrogate.evaluate import (
+        _NORMALS,
+        DEFAULT_POSTURE_SD_DEG,
+        DEFAULT_SEAT_TRACK_SD_MM,
+    )
+
+    spec = next(s for s in FAMILIES if s.name == fam.name)
+    out = []
+    for dv in BAND_CHECK_DELTA_V_KMH:
+        x = np.tile(
+            [dv, 0.0, NOMINAL["posture_deg"], NOMINAL["seat_track_mm"], NOMINAL["duration_ms"]],
+            (_NORMALS.shape[0], 1),
+        )
+        x[:, 2] = np.clip(x[:, 2] + DEFAULT_POSTURE_SD_DEG * _NORMALS[:, 0], 0.0, 25.0)
+        x[:, 3] = np.clip(x[:, 3] + DEFAULT_SEAT_TRACK_SD_MM * _NORMALS[:, 1], -120.0, 120.0)
+        y, _ = lpm_outputs(spec, x)
+        out.append(float(np.nanmean(y[:, spec.outputs.index("p_iss15")])))
+    return list(BAND_CHECK_DELTA_V_KMH), out
+
+
+def _misses(fams: list[SurrogateFamily]) -> str:
+    out = []
+    for fam in fams:
+        h = fam.meta["heldout"]
+        bad = [
+            f"{o} {100 * h[o]['median_rel_error']:.0f}%"
+            for o in fam.outputs
+            if o in h and "median_rel_error" in h[o] and h[o]["median_rel_error"] > 0.05
+        ]
+        if bad:
+            out.append(f"{fam.name} ({', '.join(bad)})")
+    return "; ".join(out) if out else "none"
+
+
+def _agreement_misses(fams: list[SurrogateFamily]) -> str:
+    out = [
+        f"{f.name} {100 * f.meta['heldout']['decision_agreement_p']:.1f}%"
+        for f in fams
+        if f.meta["heldout"]["decision_agreement_p"] <= 0.97
+    ]
+    return "; ".join(out) if out else "none"
+
+
+def _pooled(artifact_dir: Path, fams: list[SurrogateFamily]) -> dict[str, str]:
+    rel: dict[str, list[float]] = {}
+    agree: list[bool] = []
+    agree_iss: list[bool] = []
+    for fam in fams:
+        xh, yh = _heldout(artifact_dir, fam)
+        ok = np.all(np.isfinite(yh), axis=1)
+        xh, yh = xh[ok], yh[ok]
+        yp = fam.predict(xh)
+        for k, o in enumerate(fam.outputs):
+            if o == "p_iss15":
+                agree += list((yh[:, k] >= 0.5) == (yp[:, k] >= 0.5))
+            elif o == "iss":
+                agree_iss += list((yh[:, k] >= 15) == (yp[:, k] >= 15))
+            else:
+                r = np.abs(yp[:, k] - yh[:, k]) / np.maximum(np.abs(yh[:, k]), 1e-12)
+                rel.setdefault(o, []).extend(r.tolist())
+    out = {
+        f"{o} median relative error": f"{100 * float(np.median(v)):.1f}%" for o, v in rel.items()
+    }
+    out["ISS15+ agreement (P >= 0.5)"] = f"{100 * float(np.mean(agree)):.1f}%"
+    out["ISS15+ agreement (ISS >= 15)"] = f"{100 * float(np.mean(agree_iss)):.1f}%"
+    return out

@@ -1,0 +1,314 @@
+"""What the surrogates cover: families, inputs, outputs and their transforms (numpy only).
+
+One family per impact mode x body x restraint configuration. Inputs (all modes):
+
+=================  =========  ===============  ==========================================
+input              unit       design range     why
+=================  =========  ===============  ==========================================
+``delta_v_kmh``    km/h       5 - 120          see :data:`DELTA_V_RANGE_KMH`
+``angle_deg``      deg        0 - max |offset| |PDOF - mode axis| inside the coverage
+``posture_deg``    deg        0 - 25           :data:`models.lpm.domain.POSTURE_RANGE_DEG`
+``seat_track_mm``  mm         -120 - 120       :data:`models.lpm.domain.SEAT_TRACK_RANGE_MM`
+``duration_ms``    ms         40 - 150         haversine duration T, :data:`DURATION_RANGE_MS`
+=================  =========  ===============  ==========================================
+
+The angle enters as its magnitude: the planar LPMs are driven by the pulse
+component on the mode's axis only (``models.lpm.simulate``), ``delta-V cos(angle)``,
+which is even in the angle; one input range then serves occupants on both sides
+(the side coverages are mirror images).
+
+Restraints: frontal families exist for all four belt x airbag combinations.
+In the rear and side modes the frontal airbag does not act in the LPM
+(``models.lpm.simulate.resolve_restraints``: it acts in a rear case only with
+an explicit firing time, never in a side case), so those families are shared
+between "deployed" and "not deployed" (a rear case with an explicit airbag
+firing time is outside the surrogates; the caller must flag it).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Final
+
+import numpy as np
+import numpy.typing as npt
+
+from models.impact_mode import COVERAGE_DEG, ImpactMode
+from models.lpm.domain import POSTURE_RANGE_DEG, SEAT_TRACK_RANGE_MM
+from models.notification import Body
+
+__all__ = [
+    "ANGLE_RANGE_DEG",
+    "DELTA_V_PIECES_KMH",
+    "DELTA_V_RANGE_KMH",
+    "DURATION_RANGE_MS",
+    "FAMILIES",
+    "INPUT_NAMES",
+    "ISS_MAX",
+    "LOGIT_CLIP",
+    "LOG_INPUTS",
+    "P_RESOLUTION",
+    "MEASURE_FLOORS",
+    "FamilySpec",
+    "MODE_OUTPUTS",
+    "family_name",
+    "from_output_scale",
+    "piece_ranges",
+    "to_unit",
+    "to_output_scale",
+]
+
+FloatArray = npt.NDArray[np.float64]
+
+#: Delta-V design range, km/h. The service accepts up to 200 km/h
+#: (models.pulse.MAX_DELTA_V_KMH), but above about 120 km/h every restraint
+#: configuration of the LPMs bottoms out on the interior (P(ISS >= 15) is
+#: saturated; README "unrestrained cases bottom out"), and a polynomial over
+#: 5-200 km/h would spend its degree on that plateau. Above 120 km/h the
+#: surrogate is evaluated at 120 km/h and the result is flagged as clamped (a
+#: lower bound on injury, the LPMs being monotone in delta-V). Below 5 km/h
+#: (no injury in any mode) it is evaluated at 5 km/h.
+DELTA_V_RANGE_KMH: Final[tuple[float, float]] = (5.0, 120.0)
+
+#: Haversine duration design range, ms. [R] occupant-lpm-notes.md section 3:
+#: NCAP barrier pulses 80-100 ms, rear sled ~90 ms, side pulses shorter;
+#: default duration of a summary pulse 100 ms (models.pulse). Outside the
+#: range the duration is clamped and flagged.
+DURATION_RANGE_MS: Final[tuple[float, float]] = (40.0, 150.0)
+
+
+def _max_offset(mode: ImpactMode) -> float:
+    start, end = COVERAGE_DEG[mode]
+    axis = {
+        ImpactMode.FRONTAL: 0.0,
+        ImpactMode.NEAR_SIDE: 90.0,
+        ImpactMode.REAR: 180.0,
+        ImpactMode.FAR_SIDE: 270.0,
+    }[mode]
+
+    def off(a: float) -> float:
+        d = (a - axis) % 360.0
+        return abs(d - 360.0 if d > 180.0 else d)
+
+    return max(off(start), off(end))
+
+
+#: |angle from the mode's axis| covered, deg (from models.impact_mode.COVERAGE_DEG:
+#: frontal 30, near side 20, rear 40, far side 20).
+ANGLE_RANGE_DEG: Final[dict[ImpactMode, tuple[float, float]]] = {
+    m: (0.0, _max_offset(m)) for m in ImpactMode
+}
+
+#: Input names, in column order of every design and basis.
+INPUT_NAMES: Final[tuple[str, ...]] = (
+    "delta_v_kmh",
+    "angle_deg",
+    "posture_deg",
+    "seat_track_mm",
+    "duration_ms",
+)
+
+#: Delta-V pieces, km/h: each family is a set of PCEs, one per interval
+#: between consecutive edges (equal-ish widths in log delta-V). [R] Measured on
+#: the frontal 50M belted family: one PCE over 5-120 km/h leaves a median
+#: relative error of 10-16 % on HIC15 and Nij (kinks where contacts start,
+#: saturation, HIC window switches); 20-25 km/h wide pieces bring it to about 4 %.
+DELTA_V_PIECES_KMH: Final[tuple[float, ...]] = (5.0, 20.0, 40.0, 70.0, 120.0)
+
+#: Each piece's design extends beyond its interval by this fraction of its
+#: log width on both sides (clipped to the whole range), so the PCE is not at
+#: its design edge where the next piece takes over.
+PIECE_MARGIN: Final[float] = 0.1
+
+
+def piece_ranges(
+    ranges: tuple[tuple[float, float], ...], edges: tuple[float, ...] = DELTA_V_PIECES_KMH
+) -> list[tuple[tuple[float, float], ...]]:
+    """Design ranges of each delta-V piece (input 0 narrowed; the others unchanged).
+
+    Parameters
+    ----------
+    ranges : tuple of (low, high)
+        The family's input ranges.
+    edges : tuple of float, optional
+        Piece edges, km/h, increasing.
+    """
+    lo_all, hi_all = ranges[0]
+    out = []
+    for a, b in zip(edges[:-1], edges[1:], strict=True):
+        w = np.log(b) - np.log(a)
+        lo = max(lo_all, float(np.exp(np.log(a) - PIECE_MARGIN * w)))
+        hi = min(hi_all, float(np.exp(np.log(b) + PIECE_MARGIN * w)))
+        out.append(((lo, hi), *ranges[1:]))
+    return out
+
+
+#: Inputs standardised on a log scale (the LPM measures behave roughly as
+#: powers of delta-V and of the pulse duration, so log-log is nearly linear).
+LOG_INPUTS: Final[tuple[bool, ...]] = (True, False, False, False, True)
+
+
+def _bounds(
+    ranges: Sequence[tuple[float, float]],
+) -> tuple[FloatArray, FloatArray, npt.NDArray[np.bool_]]:
+    rr = list(ranges)
+    lo = np.array([float(r[0]) for r in rr])
+    hi = np.array([float(r[1]) for r in rr])
+    return lo, hi, np.array(LOG_INPUTS[: lo.size])
+
+
+def to_unit(x: npt.ArrayLike, ranges: Sequence[tuple[float, float]]) -> FloatArray:
+    """Raw inputs (n, dim) -> [-1, 1] over the design ranges (log scale per :data:`LOG_INPUTS`)."""
+    xv = np.atleast_2d(np.asarray(x, dtype=np.float64))
+    lo, hi, lg = _bounds(ranges)
+    llo = np.log(np.where(lg, lo, 1.0))
+    lhi = np.log(np.where(lg, hi, 2.0))
+    ll = (np.log(np.where(lg, np.maximum(xv, 1e-300), 1.0)) - llo) / (lhi - llo)
+    u = np.where(lg, ll, (xv - lo) / (hi - lo))
+    return np.asarray(2.0 * u - 1.0, dtype=np.float64)
+
+
+#: Measures each mode computes (models.lpm.simulate._measures), then the two scores.
+MODE_OUTPUTS: Final[dict[ImpactMode, tuple[str, ...]]] = {
+    ImpactMode.FRONTAL: (
+        "hic15",
+        "nij",
+        "chest_deflection_mm",
+        "chest_vc_m_s",
+        "chest_a3ms_g",
+        "p_iss15",
+        "iss",
+    ),
+    ImpactMode.REAR: ("hic15", "nij", "p_iss15", "iss"),
+    ImpactMode.NEAR_SIDE: (
+        "hic15",
+        "nij",
+        "chest_deflection_mm",
+        "chest_vc_m_s",
+        "chest_a3ms_g",
+        "chest_cti",
+        "abdomen_vc_m_s",
+        "p_iss15",
+        "iss",
+    ),
+}
+MODE_OUTPUTS[ImpactMode.FAR_SIDE] = MODE_OUTPUTS[ImpactMode.NEAR_SIDE]
+
+#: The positive measures are fitted as log(max(x, floor) + floor): the floor
+#: (well below any injurious value, in the measure's unit) keeps zero
+#: responses finite. [R] below the lowest risk-curve thresholds of
+#: models.injury.risk by two orders of magnitude.
+MEASURE_FLOORS: Final[dict[str, float]] = {
+    "hic15": 1.0,
+    "nij": 0.01,
+    "chest_deflection_mm": 0.5,
+    "chest_vc_m_s": 0.01,
+    "chest_a3ms_g": 0.5,
+    "chest_cti": 0.01,
+    "abdomen_vc_m_s": 0.01,
+}
+
+#: P(ISS >= 15) is fitted on the logit scale, clipped to [eps, 1 - eps]. [R]
+#: 1e-3 rather than 1e-6: the saturated plateaus (P within 1e-3 of 0 or 1)
+#: otherwise dominate the logit variance and the fit spends its terms there
+#: instead of on the transition that decides ISS15+. After
+#: evaluation values within 2 eps of 0 or 1 are reported as exactly 0 or 1.
+#: Comparisons of surrogate probabilities (interval contains a value) should
+#: allow this resolution (:data:`P_RESOLUTION`).
+LOGIT_CLIP: Final[float] = 1e-3
+#: Resolution of the surrogate's P(ISS >= 15) near 0 and 1.
+P_RESOLUTION: Final[float] = 2.0 * LOGIT_CLIP
+
+#: Largest ISS (AIS 5 in three regions, or any AIS 6).
+ISS_MAX: Final[float] = 75.0
+
+
+def to_output_scale(name: str, value: npt.ArrayLike) -> FloatArray:
+    """Physical value -> the scale the PCE is fitted on."""
+    v = np.asarray(value, dtype=np.float64)
+    if name == "p_iss15":
+        p = np.clip(v, LOGIT_CLIP, 1.0 - LOGIT_CLIP)
+        return np.asarray(np.log(p / (1.0 - p)), dtype=np.float64)
+    if name == "iss":
+        return v
+    floor = MEASURE_FLOORS[name]
+    return np.asarray(np.log(np.maximum(v, 0.0) + floor), dtype=np.float64)
+
+
+def from_output_scale(name: str, value: npt.ArrayLike) -> FloatArray:
+    """Fitted scale -> physical value (inverse of :func:`to_output_scale`, clipped)."""
+    v = np.asarray(value, dtype=np.float64)
+    if name == "p_iss15":
+        p = 1.0 / (1.0 + np.exp(-np.clip(v, -50.0, 50.0)))
+        # within the fitted resolution of 0 or 1: exactly 0 or 1
+        p = np.where(p >= 1.0 - 2.0 * LOGIT_CLIP, 1.0, np.where(p <= 2.0 * LOGIT_CLIP, 0.0, p))
+        return np.asarray(p, dtype=np.float64)
+    if name == "iss":
+        return np.clip(v, 0.0, ISS_MAX)
+    floor = MEASURE_FLOORS[name]
+    return np.asarray(np.maximum(np.exp(np.minimum(v, 50.0)) - floor, 0.0), dtype=np.float64)
+
+
+@dataclass(frozen=True)
+class FamilySpec:
+    """One surrogate family.
+
+    Attributes
+    ----------
+    name : str
+    mode : ImpactMode
+    body : Body
+    belted : bool
+    airbag_deployed : bool or None
+        None when the family serves both airbag states (rear and side modes).
+    ranges : tuple of (low, high)
+        Design range of each input of :data:`INPUT_NAMES`.
+    outputs : tuple of str
+    """
+
+    name: str
+    mode: ImpactMode
+    body: Body
+    belted: bool
+    airbag_deployed: bool | None
+    ranges: tuple[tuple[float, float], ...]
+    outputs: tuple[str, ...]
+
+
+def family_name(mode: ImpactMode, body: Body, belted: bool, airbag: bool | None) -> str:
+    """File-safe family name, e.g. ``frontal__male_50th__belted__airbag``."""
+    bag = "airbag_any" if airbag is None else ("airbag" if airbag else "no_airbag")
+    return f"{mode.value}__{body.value}__{'belted' if belted else 'unbelted'}__{bag}"
+
+
+def _families() -> tuple[FamilySpec, ...]:
+    out: list[FamilySpec] = []
+    for mode in ImpactMode:
+        bags: tuple[bool | None, ...] = (True, False) if mode is ImpactMode.FRONTAL else (None,)
+        ranges = (
+            DELTA_V_RANGE_KMH,
+            ANGLE_RANGE_DEG[mode],
+            POSTURE_RANGE_DEG,
+            SEAT_TRACK_RANGE_MM,
+            DURATION_RANGE_MS,
+        )
+        for body in Body:
+            for belted in (True, False):
+                for bag in bags:
+                    out.append(
+                        FamilySpec(
+                            family_name(mode, body, belted, bag),
+                            mode,
+                            body,
+                            belted,
+                            bag,
+                            ranges,
+                            MODE_OUTPUTS[mode],
+                        )
+                    )
+    return tuple(out)
+
+
+#: Every family the full build produces (20: frontal 8, rear, near side, far side 4 each).
+FAMILIES: Final[tuple[FamilySpec, ...]] = _families()
