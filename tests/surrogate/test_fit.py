@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 from models.surrogate.basis import design_matrix, hyperbolic_multi_indices, stieltjes
 from models.surrogate.build import latin_hypercube
@@ -65,3 +66,22 @@ def test_rank_deficient_is_infinite() -> None:
     assert loo_error(psi, np.arange(10.0)) == float("inf")
     f = fit_degree(np.ones((10, 1)), np.arange(10.0))
     assert f.terms.tolist() == [0]
+
+
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_lar_order_matches_scikit_learn(seed: int) -> None:
+    """Our LAR (written for its low per-step overhead) selects in sklearn's order."""
+    from sklearn.linear_model import lars_path
+
+    from models.surrogate.fit import lar_order
+
+    rng = np.random.default_rng(seed)
+    x = rng.standard_normal((80, 12))
+    x -= x.mean(axis=0)
+    x /= np.linalg.norm(x, axis=0)
+    y = x[:, [1, 4, 7]] @ np.array([3.0, -2.0, 1.0]) + 0.05 * rng.standard_normal(80)
+    y -= y.mean()
+    _, active, _ = lars_path(x, y, method="lar", max_iter=8)
+    ours = lar_order(x, y, 8)
+    assert list(ours[: len(active)]) == list(active)[: len(ours)]
+    assert set(ours[:3]) == {1, 4, 7}
