@@ -12,10 +12,9 @@ from fastapi import FastAPI
 from fastapi.routing import APIRoute
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
-from models.triage import load_engine_models
 from service import __version__
 from service.api import cases, health
-from service.context import ServiceContext
+from service.context import ServiceContext, engine_models_for
 from service.db import migrate
 from service.db.session import make_engine, make_sessionmaker
 from service.metrics import Metrics, metrics_middleware
@@ -98,12 +97,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         models = None
         error = None
         try:
-            models = load_engine_models(
-                threshold_override=settings.triage_threshold,
-                posture_sd_deg=settings.posture_sd_deg,
-                seat_track_sd_mm=settings.seat_track_sd_mm,
-                surrogate_dir=settings.surrogate_dir,
-            )
+            models = engine_models_for(settings)
         except Exception as exc:  # reported by /readyz, the service stays alive
             error = f"{type(exc).__name__}: {exc}"
             log.error("models failed to load: %s", error)

@@ -146,16 +146,10 @@ def _evaluate_text(text: str, models: Any) -> dict[str, Any]:
 
 
 def _cmd_triage(args: argparse.Namespace) -> int:
-    from models.triage import load_engine_models
+    from service.context import engine_models_for
 
-    settings = _settings()
     try:
-        models = load_engine_models(
-            threshold_override=settings.triage_threshold,
-            posture_sd_deg=settings.posture_sd_deg,
-            seat_track_sd_mm=settings.seat_track_sd_mm,
-            surrogate_dir=settings.surrogate_dir,
-        )
+        models = engine_models_for(_settings())
     except ValueError as exc:
         _print(f"error: the models failed to load: {exc}", err=True)
         return 1

@@ -7,11 +7,21 @@ from dataclasses import dataclass
 from sqlalchemy import Engine
 from sqlalchemy.orm import Session, sessionmaker
 
-from models.triage import EngineModels
+from models.triage import EngineModels, load_engine_models
 from service.metrics import Metrics
 from service.settings import Settings
 
-__all__ = ["ServiceContext"]
+__all__ = ["ServiceContext", "engine_models_for"]
+
+
+def engine_models_for(settings: Settings) -> EngineModels:
+    """Load the engine models as the settings configure them (raises ValueError)."""
+    return load_engine_models(
+        threshold_override=settings.triage_threshold,
+        posture_sd_deg=settings.posture_sd_deg,
+        seat_track_sd_mm=settings.seat_track_sd_mm,
+        surrogate_dir=settings.surrogate_dir,
+    )
 
 
 @dataclass
