@@ -16,7 +16,6 @@ import argparse
 import datetime as dt
 import os
 import platform
-import re
 import statistics
 import sys
 import time
@@ -28,6 +27,8 @@ import numpy as np
 import scipy
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+
+from results_md import RESULTS, write_section
 
 from models.injury import (
     InjuryMeasures,
@@ -44,8 +45,6 @@ from models.notification import Body
 
 FS_HZ = 10_000.0
 DURATION_S = 0.250
-RESULTS = Path(__file__).resolve().parent / "RESULTS.md"
-SECTION = "## Injury criteria"
 
 
 def _channels(seed: int = 3) -> dict[str, np.ndarray]:
@@ -119,17 +118,6 @@ def _median_ms(fn: Callable[[], object], repeats: int, warmup: int = 20) -> tupl
     return statistics.median(times), times[int(0.9 * (len(times) - 1))]
 
 
-def _write_section(text: str) -> None:
-    body = RESULTS.read_text() if RESULTS.exists() else "# Benchmark results\n"
-    pattern = re.compile(rf"^{re.escape(SECTION)}\n.*?(?=^## |\Z)", re.S | re.M)
-    block = text.rstrip("\n") + "\n\n"
-    if pattern.search(body):
-        body = pattern.sub(lambda _: block, body, count=1)
-    else:
-        body = body.rstrip("\n") + "\n\n" + block
-    RESULTS.write_text(body.rstrip("\n") + "\n")
-
-
 def main() -> None:
     """Run the benchmark, print the figures and update RESULTS.md."""
     parser = argparse.ArgumentParser(description=__doc__)
@@ -157,7 +145,7 @@ def main() -> None:
 
     n = int(round(DURATION_S * FS_HZ))
     lines = [
-        SECTION,
+        "## Injury criteria",
         "",
         f"`python benchmarks/bench_injury.py` ({dt.datetime.now(dt.UTC):%Y-%m-%d %H:%M} UTC). "
         f"Input: {DURATION_S * 1e3:.0f} ms at {FS_HZ / 1e3:.0f} kHz ({n} samples per channel), "
@@ -178,7 +166,7 @@ def main() -> None:
         "under 2 ms (issue 3).",
     ]
     if not args.no_write:
-        _write_section("\n".join(lines))
+        write_section("injury-criteria", "\n".join(lines))
         print(f"wrote {RESULTS}")
 
 

@@ -29,6 +29,8 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from results_md import write_section
+
 from models.impact_mode import ImpactMode
 from models.lpm.params import load_parameter_set
 from models.lpm.pulses import haversine_pulse, side_pulse
@@ -41,10 +43,6 @@ from models.lpm.simulate import (
     simulate_reference,
 )
 from models.notification import AirbagState, Body, Occupant, Seat
-
-RESULTS = Path(__file__).resolve().parent / "RESULTS.md"
-BEGIN = "<!-- BEGIN occupant-lpms -->"
-END = "<!-- END occupant-lpms -->"
 
 
 def _pulse(mode: ImpactMode, dv_kmh: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -157,7 +155,6 @@ def main() -> int:
         )
 
     lines = [
-        BEGIN,
         "## Occupant LPMs",
         "",
         f"`python benchmarks/bench_lpm.py` ({time.strftime('%Y-%m-%d %H:%M UTC', time.gmtime())}, "
@@ -199,19 +196,11 @@ def main() -> int:
         "post-processing holds the GIL about two thirds of the time, so on this 2-core "
         "machine shared with other sessions its gain over the plain loop varies from run "
         "to run (the GIL switch interval is 5 ms).",
-        END,
     ]
     block = "\n".join(lines)
     print(block)
     if not args.no_write:
-        text = RESULTS.read_text() if RESULTS.exists() else "# Benchmark results\n"
-        if BEGIN in text and END in text:
-            pre, rest = text.split(BEGIN, 1)
-            _, post = rest.split(END, 1)
-            text = pre + block + post
-        else:
-            text = text.rstrip("\n") + "\n\n" + block + "\n"
-        RESULTS.write_text(text)
+        write_section("occupant-lpms", block)
     return 0
 
 

@@ -22,11 +22,9 @@ import time
 import uuid
 from collections.abc import Callable
 from datetime import UTC, datetime
-from pathlib import Path
 from typing import Any
 
-RESULTS = Path(__file__).resolve().parent / "RESULTS.md"
-BEGIN, END = "<!-- BEGIN service -->", "<!-- END service -->"
+from results_md import RESULTS, write_section
 
 
 def _percentiles(samples_s: list[float]) -> tuple[float, float]:
@@ -43,18 +41,6 @@ def _time(fn: Callable[[], object], repeats: int) -> tuple[float, float]:
         fn()
         samples.append(time.perf_counter() - t0)
     return _percentiles(samples)
-
-
-def _write_section(text: str) -> None:
-    body = RESULTS.read_text() if RESULTS.exists() else "# Benchmark results\n"
-    block = f"{BEGIN}\n{text.rstrip()}\n{END}"
-    if BEGIN in body and END in body:
-        head, rest = body.split(BEGIN, 1)
-        _, tail = rest.split(END, 1)
-        body = head + block + tail
-    else:
-        body = body.rstrip("\n") + "\n\n" + block + "\n"
-    RESULTS.write_text(body.rstrip("\n") + "\n")
 
 
 def main() -> None:
@@ -142,7 +128,7 @@ def main() -> None:
     text = "\n".join(lines)
     print(text)
     if not args.no_write:
-        _write_section(text)
+        write_section("service", text)
         print(f"\nwrote {RESULTS}")
 
 

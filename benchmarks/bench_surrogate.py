@@ -28,15 +28,14 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from results_md import write_section
+
 from models.surrogate.evaluate import (
     N_SENSOR_SAMPLES,
     SurrogateLibrary,
     default_artifact_dir,
 )
 
-RESULTS = Path(__file__).resolve().parent / "RESULTS.md"
-BEGIN = "<!-- BEGIN pce-surrogates -->"
-END = "<!-- END pce-surrogates -->"
 N_CALLS = 300
 N_WARMUP = 20
 
@@ -92,7 +91,6 @@ def main() -> int:
     now = datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC")
     load = os.getloadavg()
     lines = [
-        BEGIN,
         "## PCE surrogates",
         "",
         f"`python benchmarks/bench_surrogate.py` ({now}, {platform.machine()}, "
@@ -144,18 +142,10 @@ def main() -> int:
             f"Median per family {statistics.median(per_family):.1f} s"
             " (two families run concurrently, so per-family times include contention).",
         ]
-    lines.append(END)
     block = "\n".join(lines)
     print(block)
     if not args.no_write:
-        text = RESULTS.read_text() if RESULTS.exists() else "# Benchmark results\n"
-        if BEGIN in text and END in text:
-            pre, rest = text.split(BEGIN, 1)
-            _, post = rest.split(END, 1)
-            text = pre + block + post
-        else:
-            text = text.rstrip("\n") + "\n\n" + block + "\n"
-        RESULTS.write_text(text)
+        write_section("pce-surrogates", block)
     return 0
 
 

@@ -237,7 +237,8 @@ def install_problem_handlers(app: FastAPI) -> None:
         return problem_response(
             500,
             "Internal server error",
-            "The server failed to process the request; nothing was stored for it.",
+            "The server failed to process the request. A case is stored only in the transaction "
+            "that answers 201; re-send the same event_id to get it or to retry.",
             slug="internal",
             instance=request.url.path,
         )
