@@ -360,7 +360,12 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    args = build_parser().parse_args(argv)
+    raw = list(sys.argv[1:] if argv is None else argv)
+    if raw[:1] == ["build-surrogates"]:
+        # handed over whole: argparse's REMAINDER does not pass on arguments
+        # that start with "--" (``--family NAME``, ``--help``)
+        return _cmd_build_surrogates(argparse.Namespace(build_args=raw[1:]))
+    args = build_parser().parse_args(raw)
     return int(args.func(args))
 
 

@@ -14,7 +14,7 @@ given at mid track in the parameter set; a seat moved forward by
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import numpy.typing as npt
@@ -84,6 +84,7 @@ class ContactSpec:
     share: float = -1.0
     bottom_cap: float = 0.0
     crush_viscosity: float = 200.0
+    hysteresis: float = 0.0
 
     def row(self, side: float) -> list[float]:
         """The contact as a row of the kernel's contact table.
@@ -148,6 +149,26 @@ class Model:
     contact_names: tuple[str, ...]
     belt_names: tuple[str, ...]
     info: dict[str, float] = field(default_factory=dict)
+
+
+#: Which parameter gives each sagittal contact its unloading hysteresis
+#: (share of the elastic force not returned while the contact unloads,
+#: ``kernel.C_HYST``): crushable interior trim, the vented airbag and the seat
+#: foam. The coronal (side) contacts stay elastic with dampers.
+SAGITTAL_HYSTERESIS: dict[str, str] = {
+    "airbag_head": "frontal.airbag.hysteresis",
+    "airbag_chest": "frontal.airbag.hysteresis",
+    "wheel_chest": "frontal.interior_hysteresis",
+    "wheel_head": "frontal.interior_hysteresis",
+    "windshield_head": "frontal.interior_hysteresis",
+    "dash_head": "frontal.interior_hysteresis",
+    "dash_chest": "frontal.interior_hysteresis",
+    "knee_bolster": "frontal.interior_hysteresis",
+    "seat_back_pelvis": "seat.foam_hysteresis",
+    "seat_back_abdomen": "seat.foam_hysteresis",
+    "seat_back_thorax": "seat.foam_hysteresis",
+    "head_restraint": "seat.foam_hysteresis",
+}
 
 
 def _u(a: float) -> np.ndarray:
@@ -621,6 +642,12 @@ def _sagittal(ps: ParameterSet, occ: Occupant, rs: Restraints) -> Model:
             ps["frontal.airbag.deployment_stiffness"],
         ]
     )
+    contacts = [
+        replace(c, hysteresis=ps[SAGITTAL_HYSTERESIS[c.name]])
+        if c.name in SAGITTAL_HYSTERESIS
+        else c
+        for c in contacts
+    ]
     return _finish(
         "sagittal",
         ll,
@@ -895,6 +922,7 @@ def _finish(
         rows.append(
             c.row(side)
             + [ux, uz, length, -uz * side, ux * side, c.share, c.bottom_cap, c.crush_viscosity]
+            + [c.hysteresis]
         )
     ct = np.array(rows, dtype=np.float64).reshape(-1, K.NCF)
     bt = np.array(belts, dtype=np.float64).reshape(-1, K.NBF)

@@ -8,7 +8,7 @@ from models.impact_mode import ImpactMode
 from models.injury.assessment import InjuryMeasures
 from models.lpm.params import ParameterSet
 from models.lpm.pulses import haversine_pulse, ncap_frontal_pulse, side_pulse
-from models.lpm.simulate import simulate
+from models.lpm.simulate import LpmResult, simulate
 from models.notification import Body, Occupant
 from tests.lpm.helpers import occupant
 
@@ -47,24 +47,18 @@ def _known(reason: str) -> pytest.MarkDecorator:
     return pytest.mark.xfail(strict=True, reason=reason)
 
 
-#: Forward-lean cases that are not (yet) worse than neutral, with the reason.
+#: Forward-lean cases whose HIC15 or ISS point estimate is lower than neutral
+#: although P(ISS >= 15) rises, with the reason.
 LEAN_REASONS = {
     (Body.MALE_50TH, False, True): (
         "open item: the unbelted 50M leaning forward meets the airbag earlier, at a lower"
-        " relative speed (HIC15 1030 -> 468; ISS, Nij and P(ISS >= 15) do not fall); the"
-        " out-of-position punch-out is crudely modelled"
-    ),
-    (Body.FEMALE_5TH, False, True): (
-        "open item: the unbelted 5F leaning forward meets the airbag earlier, at a lower"
-        " relative speed (ISS equal, Nij and P(ISS >= 15) rise, HIC15 451 -> 423 falls just"
-        " beyond the 5 % tolerance)"
+        " relative speed (HIC15 496 -> 447, ISS 10 -> 9), while Nij (1.24 -> 1.95) and"
+        " P(ISS >= 15) (0.42 -> 0.55) rise; the out-of-position punch-out is crudely modelled"
     ),
     (Body.MALE_50TH, True, False): (
-        "open item: belted 50M without airbag; this case passed before only because the"
-        " leaning head bottomed out on a rigid column (110 kN, HIC15 34751); with the"
-        " force-limited steering-assembly crush (FMVSS 203) the head reaches the wheel earlier"
-        " and slower: HIC15 718 -> 271, ISS 4 -> 0, although Nij (1.00 -> 1.68) and"
-        " P(ISS >= 15) (0.20 -> 0.35) rise"
+        "open item: belted 50M without airbag: the leaning head reaches the force-limited"
+        " steering assembly (FMVSS 203) earlier and slower: HIC15 745 -> 282, ISS 4 -> 0,"
+        " while Nij (0.71 -> 0.95) and P(ISS >= 15) (0.15 -> 0.19) rise"
     ),
 }
 
@@ -168,38 +162,56 @@ def test_airbag_lowers_chest_acceleration_at_56_kmh(params: ParameterSet) -> Non
     assert with_bag.chest_a3ms_g < without.chest_a3ms_g
 
 
-@pytest.mark.parametrize(
-    ("body", "belted", "airbag"),
-    [
-        pytest.param(
-            b,
-            belt,
-            bag,
-            marks=_known(LEAN_REASONS[(b, belt, bag)]) if (b, belt, bag) in LEAN_REASONS else (),
+LEAN_GRID = [
+    (b, belt, bag) for b in Body for belt, bag in ((True, True), (True, False), (False, True))
+]
+
+
+def _neutral_and_leaning(
+    params: ParameterSet, body: Body, belted: bool, airbag: bool
+) -> tuple[LpmResult, LpmResult]:
+    return tuple(  # type: ignore[return-value]
+        simulate(
+            *ncap_frontal_pulse(),
+            ImpactMode.FRONTAL,
+            occupant(body, belted=belted, airbag=airbag, lean_deg=lean),
+            params,
         )
-        for b in Body
-        for belt, bag in ((True, True), (True, False), (False, True))
-    ],
-)
+        for lean in (5.8, 25.0)
+    )
+
+
+@pytest.mark.parametrize(("body", "belted", "airbag"), LEAN_GRID)
 def test_forward_leaning_is_not_safer_than_neutral(
     params: ParameterSet, body: Body, belted: bool, airbag: bool
 ) -> None:
-    neutral = simulate(
-        *ncap_frontal_pulse(),
-        ImpactMode.FRONTAL,
-        occupant(body, belted=belted, airbag=airbag),
-        params,
-    )
-    leaning = simulate(
-        *ncap_frontal_pulse(),
-        ImpactMode.FRONTAL,
-        occupant(body, belted=belted, airbag=airbag, lean_deg=25.0),
-        params,
-    )
+    """Safety as the service judges it: the probability of ISS >= 15 (the
+    triage decision) and the worst neck load (Nij) do not fall when the
+    occupant leans forward 25 deg in the 56 km/h NCAP pulse."""
+    neutral, leaning = _neutral_and_leaning(params, body, belted, airbag)
+    assert neutral.assessment is not None
+    assert leaning.assessment is not None
+    assert leaning.assessment.p_iss15 >= neutral.assessment.p_iss15 - 1e-9
+    assert leaning.measures.nij is not None
+    assert neutral.measures.nij is not None
+    assert leaning.measures.nij >= neutral.measures.nij
+
+
+@pytest.mark.parametrize(
+    ("body", "belted", "airbag"),
+    [
+        pytest.param(*c, marks=_known(LEAN_REASONS[c]) if c in LEAN_REASONS else ())
+        for c in LEAN_GRID
+    ],
+)
+def test_forward_leaning_does_not_lower_hic_or_iss(
+    params: ParameterSet, body: Body, belted: bool, airbag: bool
+) -> None:
+    """Stricter: no single measure improves either (HIC15 within 5 %, ISS)."""
+    neutral, leaning = _neutral_and_leaning(params, body, belted, airbag)
     assert neutral.assessment is not None
     assert leaning.assessment is not None
     assert leaning.assessment.iss >= neutral.assessment.iss
-    assert leaning.assessment.p_iss15 >= neutral.assessment.p_iss15 - 1e-9
     assert leaning.measures.hic15 is not None
     assert neutral.measures.hic15 is not None
     assert leaning.measures.hic15 >= 0.95 * neutral.measures.hic15

@@ -173,3 +173,17 @@ def test_simulate_prints_measures_and_draws_a_plot(
         assert occupant["measures"]["hic15"] > 0
         assert 0 <= occupant["iss"] <= 75
         assert Path(path).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_build_surrogates_receives_its_own_options(capsys: pytest.CaptureFixture[str]) -> None:
+    """Options after ``build-surrogates`` reach the builder (argparse's REMAINDER
+    alone dropped those starting with ``--``): an unknown family is refused by
+    the builder itself, with exit code 2 and the known names, before any work."""
+    assert cli.main(["build-surrogates", "--family", "no_such_family"]) == 2
+    err = capsys.readouterr().err
+    assert "unknown family ['no_such_family']" in err
+    assert "frontal__male_50th__belted__airbag" in err
+    with pytest.raises(SystemExit) as exc:
+        cli.main(["build-surrogates", "--help"])
+    assert exc.value.code == 0
+    assert "--family" in capsys.readouterr().out

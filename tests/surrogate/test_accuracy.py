@@ -71,7 +71,7 @@ def test_heldout_points_against_direct_lpm(tiny_library_dir: Path) -> None:
         assert err < bound, (name, errors)
 
 
-@pytest.mark.xfail(reason="open item: HIC15 and Nij median relative error above 5 %", strict=False)
+@pytest.mark.xfail(reason="open item: HIC15 and Nij median relative error above 5 %", strict=True)
 def test_heldout_hic_nij_within_five_percent(tiny_library_dir: Path) -> None:
     errors, _ = _heldout_errors(tiny_library_dir)
     assert all(errors[n] < MAX_MEDIAN_RELATIVE_ERROR for n in ROUGH_MEASURES), errors

@@ -55,7 +55,32 @@ def test_shipped_heldout_pooled() -> None:
     assert agreement >= 0.95, agreement
 
 
-@pytest.mark.xfail(reason="open item: frontal ISS15+ agreement 92-95 % (REPORT.md)", strict=False)
 def test_shipped_heldout_agreement_target() -> None:
+    """Issue 5 target on the pooled held-out points of the 20 families (97.9 %
+    with the 600-run designs; REPORT.md Table B)."""
     _, agreement = _pooled_heldout()
     assert agreement > 0.97, agreement
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="open item: per family, the frontal families with a head-strike threshold"
+    " (belted without airbag 91-94 %) and four others stay at 95-97 % (REPORT.md Table B)",
+)
+def test_shipped_heldout_agreement_target_per_family() -> None:
+    import numpy as np
+
+    from models.surrogate.evaluate import default_artifact_dir
+    from models.surrogate.store import read_artifact
+
+    low = {}
+    for name, fam in SurrogateLibrary.load().families().items():
+        arrays, _ = read_artifact(default_artifact_dir() / f"{name}.npz")
+        x, y = arrays["heldout_x"], arrays["heldout_y"]
+        ok = np.all(np.isfinite(y), axis=1)
+        k = fam.outputs.index("p_iss15")
+        pred = fam.predict(x[ok])[:, k]
+        agreement = float(np.mean((pred >= 0.5) == (y[ok][:, k] >= 0.5)))
+        if agreement <= 0.97:
+            low[name] = agreement
+    assert low == {}
