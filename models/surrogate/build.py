@@ -616,7 +616,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     t0 = time.perf_counter()
     results: list[dict[str, Any]] = []
     with tqdm(total=len(todo), desc="surrogate families", unit="family", file=sys.stderr) as bar:
-        if skipped:
+        if args.family:
+            bar.write(f"rebuilding {len(todo)} named families")
+        elif skipped:
             bar.write(f"{skipped} families current, skipped")
         if args.workers <= 1:
             for s in todo:
