@@ -414,10 +414,14 @@ def _agreement_misses(fams: list[SurrogateFamily]) -> str:
 
 
 def _pooled(artifact_dir: Path, fams: list[SurrogateFamily]) -> dict[str, str]:
+    from models.triage import LPM_THRESHOLDS  # the service's decision thresholds
+
     rel: dict[str, list[float]] = {}
     agree: list[bool] = []
     agree_iss: list[bool] = []
+    agree_service: list[bool] = []
     for fam in fams:
+        thr = LPM_THRESHOLDS[ImpactMode(fam.name.split("__")[0])]
         xh, yh = _heldout(artifact_dir, fam)
         ok = np.all(np.isfinite(yh), axis=1)
         xh, yh = xh[ok], yh[ok]
@@ -425,6 +429,7 @@ def _pooled(artifact_dir: Path, fams: list[SurrogateFamily]) -> dict[str, str]:
         for k, o in enumerate(fam.outputs):
             if o == "p_iss15":
                 agree += list((yh[:, k] >= 0.5) == (yp[:, k] >= 0.5))
+                agree_service += list((yh[:, k] >= thr) == (yp[:, k] >= thr))
             elif o == "iss":
                 agree_iss += list((yh[:, k] >= 15) == (yp[:, k] >= 15))
             else:
@@ -435,4 +440,7 @@ def _pooled(artifact_dir: Path, fams: list[SurrogateFamily]) -> dict[str, str]:
     }
     out["ISS15+ agreement (P >= 0.5)"] = f"{100 * float(np.mean(agree)):.1f}%"
     out["ISS15+ agreement (ISS >= 15)"] = f"{100 * float(np.mean(agree_iss)):.1f}%"
+    out["ISS15+ agreement at the service's thresholds (P >= 0.10 frontal/rear, 0.05 side)"] = (
+        f"{100 * float(np.mean(agree_service)):.1f}%"
+    )
     return out
