@@ -62,13 +62,35 @@ LEAN_REASONS = {
     ),
 }
 
+#: Frontal configurations whose head strike moves to another part of the
+#: interior as delta-V rises, so that HIC15 (and Nij) drop over part of the range.
+HEAD_STRIKE_SHIFT = {
+    (Body.MALE_50TH, True, False): (
+        "open item: belted 50M without airbag: the head meets the force-limited steering"
+        " assembly at a different point of its stroke above 60 km/h (HIC15 713 -> 643 at"
+        " 60 -> 70 km/h, 2337 -> 2153 at 90 -> 100 km/h)"
+    ),
+    (Body.MALE_50TH, False, False): (
+        "open item: unrestrained 50M: from ~50 km/h the head passes over the rim to the"
+        " windshield instead of striking the wheel (HIC15 870 -> 209)"
+    ),
+    (Body.FEMALE_5TH, False, False): (
+        "open item: unrestrained 5F: above 60 km/h the chest crushes the column further and"
+        " the head strikes the wheel lower and later (HIC15 2745 -> 1065, Nij 3.0 -> 2.0)"
+    ),
+}
+
 FRONTAL_GRID = [
-    pytest.param(Body.MALE_50TH, True, True),
-    pytest.param(Body.MALE_50TH, True, False),
-    pytest.param(Body.MALE_50TH, False, True),
-    pytest.param(Body.FEMALE_5TH, True, True),
-    pytest.param(Body.FEMALE_5TH, True, False),
-    pytest.param(Body.FEMALE_5TH, False, True),
+    pytest.param(
+        b,
+        belt,
+        bag,
+        marks=_known(HEAD_STRIKE_SHIFT[(b, belt, bag)])
+        if (b, belt, bag) in HEAD_STRIKE_SHIFT
+        else (),
+    )
+    for b in Body
+    for belt, bag in ((True, True), (True, False), (False, True), (False, False))
 ]
 
 
@@ -76,11 +98,12 @@ FRONTAL_GRID = [
 def test_frontal_measures_do_not_decrease_with_delta_v(
     params: ParameterSet, body: Body, belted: bool, airbag: bool
 ) -> None:
+    """20-120 km/h in 10 km/h steps, every restraint configuration."""
     # firing times fixed so that only delta-V changes ("other inputs fixed")
     occ = occupant(body, belted=belted, airbag=airbag, fire_ms=20.0, pretensioner=True)
     rows = [
         _values(simulate(*haversine_pulse(dv, 0.09), ImpactMode.FRONTAL, occ, params).measures)
-        for dv in (30.0, 40.0, 50.0, 60.0)
+        for dv in range(20, 130, 10)
     ]
     assert _check_monotone(rows, f"{body} belt={belted} bag={airbag}") == []
 
