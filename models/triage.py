@@ -3,7 +3,8 @@
 Flow per notification: the pulse is processed once (`models.pulse`); per
 occupant the impact mode is classified (`models.impact_mode`); occupants inside
 an occupant model's coverage are simulated by that model (`models.lpm`), whose
-injury measures give region AIS, ISS and P(ISS >= 15) (`models.injury`); the
+injury measures give region AIS, ISS and P(ISS >= 15) (`models.injury`), less
+the risk curves' zero-load floor (`models.risk_calibration`); the
 95% intervals come from the PCE surrogates (`models.surrogate`) when loaded,
 else from direct runs over the sensor-uncertainty box. All other occupants are
 answered by the statistical baseline (`models.baseline`), which is also kept for
@@ -33,6 +34,13 @@ from models.lpm.params import ParameterSet, available_parameter_sets, load_param
 from models.lpm.simulate import LpmResult, simulate, warm_up
 from models.notification import AirbagState, Body, CrashNotification, Occupant, Seat
 from models.pulse import ProcessedPulse, process_pulse
+from models.risk_calibration import (
+    CALIBRATION_NAME,
+    CALIBRATION_VERSION,
+    calibration_sha256,
+    corrected_probability,
+    zero_load_probability,
+)
 from models.surrogate.evaluate import SurrogateLibrary, UncertaintyResult, default_artifact_dir
 from models.surrogate.spec import P_RESOLUTION
 
@@ -74,7 +82,10 @@ RECOMMENDATION_NO_TRAUMA_INDICATION = (
 #: Digges & Schulman recommend 0.10 for frontal and 0.05 for side crashes (sensitivity
 #: > 0.67, PPV about 0.20; crash-data-and-triage.md section 1) [V]; rear takes the
 #: frontal value [R]. The CDC 2008 panel's 20% is a vehicle-level rule for
-#: statistical models and misses many seriously injured (Bahouth 2014).
+#: statistical models and misses many seriously injured (Bahouth 2014). They apply
+#: to the occupant model's P(ISS >= 15) after the zero-load correction
+#: (`models.risk_calibration`): the uncorrected risk curves give ~5.4 % at zero
+#: load, above the side threshold.
 LPM_THRESHOLDS: Mapping[ImpactMode, float] = {
     ImpactMode.FRONTAL: 0.10,
     ImpactMode.REAR: 0.10,
@@ -140,6 +151,11 @@ class OccupantTriage:
     measures_ci95: Mapping[str, tuple[float, float]] | None = None
     interval_method: str = "coefficient_covariance"
     point_outside_interval: bool = False
+    #: occupant models only: P(ISS >= 15) from the risk curves before the
+    #: zero-load correction, and the same occupant's P(ISS >= 15) at zero load
+    #: (`models.risk_calibration`)
+    probability_uncorrected: float | None = None
+    probability_zero_load: float | None = None
 
 
 @dataclass(frozen=True)
@@ -204,6 +220,9 @@ class EngineModels:
             name="occupant LPMs and injury criteria",
             version=ENGINE_VERSION,
             sha256=lpm_code_sha256(),
+        )
+        infos["risk_calibration"] = ModelInfo(
+            name=CALIBRATION_NAME, version=CALIBRATION_VERSION, sha256=calibration_sha256()
         )
         if self.surrogates is not None:
             infos["surrogates"] = ModelInfo(
@@ -473,12 +492,23 @@ def _lpm_occupant(
         if models.threshold_override is not None
         else LPM_THRESHOLDS[impact.mode]
     )
+    # the thresholds apply to the risk attributable to the crash loads: remove the
+    # risk curves' zero-load floor from the point and from the interval (the
+    # surrogates are built at the default age, so their floor is the default age's)
+    p0 = zero_load_probability(nominal.measures, occupant.body, occupant.age_years, impact.mode)
+    p0_ci = (
+        zero_load_probability(nominal.measures, occupant.body, None, impact.mode)
+        if method == "pce_bootstrap"
+        else p0
+    )
+    p_corrected = corrected_probability(p, p0)
+    p_ci_corrected = (corrected_probability(p_ci[0], p0_ci), corrected_probability(p_ci[1], p0_ci))
     return OccupantTriage(
         seat=occupant.seat,
         body=occupant.body,
         impact=impact,
         method="lpm",
-        triage=decide(p, p_ci, threshold),
+        triage=decide(p_corrected, p_ci_corrected, threshold),
         baseline=baseline,
         iss=IssEstimate(estimate=iss, ci95=iss_ci),
         region_ais=dict(nominal.assessment.region_ais),
@@ -486,6 +516,8 @@ def _lpm_occupant(
         measures_ci95=measures_ci,
         interval_method=method,
         point_outside_interval=outside,
+        probability_uncorrected=p,
+        probability_zero_load=p0,
     )
 
 

@@ -42,6 +42,8 @@ def _occupant_out(o: OccupantTriage) -> OccupantOut:
         measures_ci95=dict(o.measures_ci95) if o.measures_ci95 is not None else None,
         interval_method=o.interval_method,
         point_outside_interval=o.point_outside_interval,
+        probability_uncorrected=o.probability_uncorrected,
+        probability_zero_load=o.probability_zero_load,
         triage=_triage_out(o.triage),
         baseline=_triage_out(o.baseline),
     )

@@ -13,8 +13,8 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
     "received_at": "2026-11-23T08:15:31Z",
     "triage": {
         "iss15_plus": False,
-        "probability": 0.08402,
-        "probability_ci95": [0.07272, 0.09643],
+        "probability": 0.03724,
+        "probability_ci95": [0.01729, 0.05304],
         "threshold": 0.1,
         "recommendation": "No telemetry indication of ISS 15 or more: destination by EMS "
         "field assessment under local protocol.",
@@ -27,7 +27,7 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
             "impact_angle_deg": 0.0,
             "in_lpm_coverage": True,
             "method": "lpm",
-            "iss": {"estimate": 0, "ci95": [0.0, 0.0]},
+            "iss": {"estimate": 0, "ci95": [0.0, 2.442]},
             "region_ais": {
                 "head_neck": 0,
                 "face": 0,
@@ -37,38 +37,38 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
                 "external": 0,
             },
             "measures": {
-                "hic15": 149.9,
-                "nij": 0.3395,
-                "chest_deflection_mm": 31.32,
-                "chest_vc_m_s": 0.1199,
-                "chest_a3ms_g": 42.16,
+                "hic15": 134.9,
+                "nij": 0.3338,
+                "chest_deflection_mm": 26.35,
+                "chest_vc_m_s": 0.08505,
+                "chest_a3ms_g": 41.14,
             },
             "measures_ci95": {
-                "hic15": [142.4, 171.2],
-                "nij": [0.2409, 0.4334],
-                "chest_deflection_mm": [29.61, 33.46],
-                "chest_vc_m_s": [0.1018, 0.1519],
-                "chest_a3ms_g": [40.25, 42.16],
+                "hic15": [127.6, 202.4],
+                "nij": [0.3117, 0.4641],
+                "chest_deflection_mm": [25.61, 27.23],
+                "chest_vc_m_s": [0.0737, 0.09901],
+                "chest_a3ms_g": [38.97, 42.06],
             },
-            "interval_method": "lpm_sensor_box",
+            "interval_method": "pce_bootstrap",
             "point_outside_interval": False,
+            "probability_uncorrected": 0.08184,
+            "probability_zero_load": 0.04633,
             "triage": {
                 "iss15_plus": False,
-                "probability": 0.08402,
-                "probability_ci95": [0.07272, 0.09643],
+                "probability": 0.03724,
+                "probability_ci95": [0.01729, 0.05304],
                 "threshold": 0.1,
-                "recommendation": "No telemetry indication of ISS 15 or more: "
-                "destination by EMS field assessment under local "
-                "protocol.",
+                "recommendation": "No telemetry indication of ISS 15 or more: destination by EMS "
+                "field assessment under local protocol.",
             },
             "baseline": {
                 "iss15_plus": True,
                 "probability": 0.4722,
                 "probability_ci95": [0.2666, 0.6876],
                 "threshold": 0.042,
-                "recommendation": "Transport to a Level I trauma center: vehicle "
-                "telemetry consistent with severe injury (ISS "
-                "15 or more likely).",
+                "recommendation": "Transport to a Level I trauma center: vehicle telemetry "
+                "consistent with severe injury (ISS 15 or more likely).",
             },
         }
     ],
@@ -90,14 +90,22 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         },
         "lpm_parameters:compact_sedan": {
             "version": "compact_sedan",
-            "sha256": "2071c950bafa1128428115a9863c0d092f10c77e1d34609073057e4b3a585501",
+            "sha256": "c3d61671270aadf0bc0e406b14057368f3db6aedf6f0ebbd9f7aed039e72d040",
         },
         "lpm_code": {
             "version": "0.1.0",
-            "sha256": "82e6c272aa36c58266acabd45f59dbb6dba35fca2f7c0a59d7873dfc304777bd",
+            "sha256": "4c24f0b4f3f4abba7e5b7c0ae7564212e0cfa75028c58bcbbec1c6e260044887",
+        },
+        "risk_calibration": {
+            "version": "1",
+            "sha256": "755e65600083bbdc760e14af7924dbca4b49f81004df31bdfa5e86bacc295a6c",
+        },
+        "surrogates": {
+            "version": "3.0.1.0",
+            "sha256": "4c642c2c25ac99bb80dfbe8659e4d096d0530001c347f1a5e13a7d74e7f26ce5",
         },
     },
-    "timings_ms": {"pulse": 0.9, "occupants": 68.2, "engine_total": 69.1},
+    "timings_ms": {"pulse": 0.9, "occupants": 12.4, "engine_total": 13.3},
 }
 
 #: `GET /v1/cases/{case_id}`.

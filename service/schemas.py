@@ -497,7 +497,12 @@ class TriageOut(OutModel):
     """An ISS15+ triage decision."""
 
     iss15_plus: bool = Field(description="True: likely ISS >= 15, transport to a Level I center.")
-    probability: float = Field(ge=0, le=1, description="Estimated P(ISS >= 15) or its proxy.")
+    probability: float = Field(
+        ge=0,
+        le=1,
+        description="Estimated P(ISS >= 15) or its proxy. Occupant models: the risk attributable "
+        "to the crash loads (zero-load correction, see the occupant's `probability_uncorrected`).",
+    )
     probability_ci95: tuple[float, float] = Field(
         description="95% interval of `probability` [low, high]."
     )
@@ -564,6 +569,21 @@ class OccupantOut(OutModel):
     point_outside_interval: bool = Field(
         default=False,
         description="The direct occupant-model estimate lies outside the surrogate interval.",
+    )
+    probability_uncorrected: float | None = Field(
+        default=None,
+        ge=0,
+        le=1,
+        description="Occupant models only: P(ISS >= 15) from the published risk curves before "
+        "the zero-load correction. `triage.probability` = (this - probability_zero_load) / "
+        "(1 - probability_zero_load), clipped to [0, 1] (Abbott's formula).",
+    )
+    probability_zero_load: float | None = Field(
+        default=None,
+        ge=0,
+        le=1,
+        description="Occupant models only: the same occupant's P(ISS >= 15) from the risk "
+        "curves with every measure at zero (about 0.054: the curves' floor, not crash risk).",
     )
     triage: TriageOut
     baseline: TriageOut = Field(

@@ -211,13 +211,6 @@ def test_without_surrogates_the_interval_comes_from_direct_runs() -> None:
     assert lo <= occ.triage.probability <= hi
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="open item: the occupant models' P(ISS >= 15) has a floor of ~5-6 % at zero load"
-    " (published risk curves with non-zero intercepts, e.g. NHTSA Nij 3.8 % AIS3+), above the"
-    " side threshold 0.05: every side occupant in coverage is sent to a trauma center"
-    " (README, 'Known limitation'); the thresholds need a field calibration",
-)
 @pytest.mark.parametrize("pdof", [90.0, 270.0])
 def test_a_minor_side_crash_is_not_sent_to_a_trauma_center(
     models: EngineModels, pdof: float

@@ -26,6 +26,13 @@ def test_each_documented_example_is_triaged_stored_and_read_back(
     assert 0.0 <= lo <= result["triage"]["probability"] <= hi <= 1.0
     assert lo < hi, "the interval comes from the coefficient uncertainty: never degenerate"
     assert result["models"]["baseline"]["sha256"]
+    for occ in result["occupants"]:
+        if occ["method"] == "lpm":  # decided on the risk less the curves' zero-load floor
+            assert 0.0 < occ["probability_zero_load"] < occ["probability_uncorrected"]
+            assert occ["triage"]["probability"] < occ["probability_uncorrected"]
+            assert result["models"]["risk_calibration"]["sha256"]
+        else:
+            assert occ["probability_uncorrected"] is None
 
     stored = api_any_db.client.get(
         response.headers["Location"], headers=api_any_db.headers("auditor")
