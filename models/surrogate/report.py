@@ -9,7 +9,9 @@ Figure-8-like plot of P(ISS >= 15) against delta-V with its bootstrap band.
 
 from __future__ import annotations
 
+import dataclasses
 import json
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -413,15 +415,35 @@ def _agreement_misses(fams: list[SurrogateFamily]) -> str:
     return "; ".join(out) if out else "none"
 
 
-def _pooled(artifact_dir: Path, fams: list[SurrogateFamily]) -> dict[str, str]:
+def service_raw_threshold(family_name: str, outputs: Sequence[str]) -> float:
+    """The service's decision threshold for a family, on the uncorrected P(ISS >= 15).
+
+    The service decides on (P - P0) / (1 - P0) >= t (``models.risk_calibration``,
+    ``models.triage.LPM_THRESHOLDS``), i.e. on P >= P0 + t (1 - P0), with P0 the
+    zero-load probability of the family's body, mode and measures (default age,
+    as the surrogates are built).
+    """
+    from models.injury.assessment import InjuryMeasures
+    from models.notification import Body
+    from models.risk_calibration import zero_load_probability
     from models.triage import LPM_THRESHOLDS  # the service's decision thresholds
 
+    mode_name, body_name = family_name.split("__")[:2]
+    mode = ImpactMode(mode_name)
+    fields = {f.name for f in dataclasses.fields(InjuryMeasures)}
+    present = InjuryMeasures(**dict.fromkeys((o for o in outputs if o in fields), 0.0))
+    p0 = zero_load_probability(present, Body(body_name), None, mode)
+    t = LPM_THRESHOLDS[mode]
+    return p0 + t * (1.0 - p0)
+
+
+def _pooled(artifact_dir: Path, fams: list[SurrogateFamily]) -> dict[str, str]:
     rel: dict[str, list[float]] = {}
     agree: list[bool] = []
     agree_iss: list[bool] = []
     agree_service: list[bool] = []
     for fam in fams:
-        thr = LPM_THRESHOLDS[ImpactMode(fam.name.split("__")[0])]
+        thr = service_raw_threshold(fam.name, fam.outputs)
         xh, yh = _heldout(artifact_dir, fam)
         ok = np.all(np.isfinite(yh), axis=1)
         xh, yh = xh[ok], yh[ok]
@@ -440,7 +462,8 @@ def _pooled(artifact_dir: Path, fams: list[SurrogateFamily]) -> dict[str, str]:
     }
     out["ISS15+ agreement (P >= 0.5)"] = f"{100 * float(np.mean(agree)):.1f}%"
     out["ISS15+ agreement (ISS >= 15)"] = f"{100 * float(np.mean(agree_iss)):.1f}%"
-    out["ISS15+ agreement at the service's thresholds (P >= 0.10 frontal/rear, 0.05 side)"] = (
-        f"{100 * float(np.mean(agree_service)):.1f}%"
-    )
+    out[
+        "ISS15+ agreement at the service's decision (zero-load-corrected P >= 0.10 frontal/rear,"
+        " 0.05 side)"
+    ] = f"{100 * float(np.mean(agree_service)):.1f}%"
     return out

@@ -62,6 +62,29 @@ def test_shipped_heldout_agreement_target() -> None:
     assert agreement > 0.97, agreement
 
 
+def test_shipped_heldout_agreement_at_the_service_decision() -> None:
+    """Pooled over the 20 families, the surrogate and the LPM take the same decision as
+    the service does (zero-load-corrected P(ISS >= 15) against the mode's threshold) on
+    more than 97 % of the held-out points (98.0 %, REPORT.md)."""
+    import numpy as np
+
+    from models.surrogate.evaluate import default_artifact_dir
+    from models.surrogate.report import service_raw_threshold
+    from models.surrogate.store import read_artifact
+
+    agree: list[bool] = []
+    for name, fam in SurrogateLibrary.load().families().items():
+        arrays, _ = read_artifact(default_artifact_dir() / f"{name}.npz")
+        x, y = arrays["heldout_x"], arrays["heldout_y"]
+        ok = np.all(np.isfinite(y), axis=1)
+        k = fam.outputs.index("p_iss15")
+        thr = service_raw_threshold(name, fam.outputs)
+        assert 0.10 < thr < 0.15, "the threshold on the uncorrected scale lies above t"
+        pred = fam.predict(x[ok])[:, k]
+        agree += list((pred >= thr) == (y[ok][:, k] >= thr))
+    assert float(np.mean(agree)) > 0.97
+
+
 @pytest.mark.xfail(
     strict=True,
     reason="open item: per family, the frontal families with a head-strike threshold"
