@@ -6,4 +6,4 @@ Plain data in, plain data out. Nothing in this package imports the web layer
 
 #: Version of the engine code. Stored with every case; bump on any change that
 #: can alter a result.
-ENGINE_VERSION = "0.1.0"
+ENGINE_VERSION = "0.2.0"

@@ -53,7 +53,9 @@ MODE_PDOF_DEG: dict[ImpactMode, float] = {
 }
 #: Delta-V grid, km/h (5 km/h steps over the surrogates' design range).
 DELTA_V_GRID_KMH: tuple[float, ...] = tuple(float(v) for v in range(5, 125, 5))
-#: Restraint configurations (label, belted, frontal airbag deployed).
+#: Restraint configurations (label, belted, airbag deployed): the airbag is the one
+#: that acts in the mode's occupant model, the frontal airbag (frontal, rear, far
+#: side: there it does not act) or the side and curtain airbags (near side).
 RESTRAINTS: tuple[tuple[str, bool, bool], ...] = (
     ("belt + airbag", True, True),
     ("belt", True, False),
@@ -86,6 +88,9 @@ def _notification(
         body=body,
         belted=belted,
         frontal_airbag=AirbagState.DEPLOYED if airbag else AirbagState.NOT_DEPLOYED,
+        side_airbag=(
+            AirbagState.DEPLOYED if airbag and mode is ImpactMode.NEAR_SIDE else AirbagState.ABSENT
+        ),
     )
     return CrashNotification(
         event_id="decision-map",
@@ -96,6 +101,11 @@ def _notification(
         rollover=False,
         occupants=(occupant,),
     )
+
+
+def _label(mode: ImpactMode, label: str) -> str:
+    """In the near-side model the airbag that acts is the side and curtain airbag."""
+    return label.replace("airbag", "side airbags") if mode is ImpactMode.NEAR_SIDE else label
 
 
 def decision_rows(
@@ -124,7 +134,7 @@ def decision_rows(
                         DecisionRow(
                             mode=mode,
                             body=body,
-                            restraint=label,
+                            restraint=_label(mode, label),
                             delta_v_kmh=float(dv),
                             probability=occ.triage.probability,
                             threshold=occ.triage.threshold,

@@ -57,7 +57,7 @@ class Sex(StrEnum):
 
 
 class AirbagState(StrEnum):
-    """State of the frontal airbag in front of the occupant."""
+    """State of an airbag at the occupant's seat (frontal, or side and curtain)."""
 
     DEPLOYED = "deployed"
     NOT_DEPLOYED = "not_deployed"
@@ -145,6 +145,10 @@ class Occupant:
     body : Body
     belted : bool
     frontal_airbag : AirbagState
+    side_airbag : AirbagState or None
+        The side (thorax) and curtain airbag on this occupant's side of the car;
+        it acts in a near-side crash. None: not reported (the occupant models
+        then assume none, the conservative choice).
     age_years : float or None
         Unknown ages are imputed by the models that need them.
     sex : Sex or None
@@ -163,6 +167,7 @@ class Occupant:
     body: Body
     belted: bool
     frontal_airbag: AirbagState
+    side_airbag: AirbagState | None = None
     age_years: float | None = None
     sex: Sex | None = None
     airbag_fire_time_ms: float | None = None

@@ -397,6 +397,13 @@ def _sensor_box(
     return runs
 
 
+def _mode_airbag_deployed(occupant: Occupant, mode: ImpactMode) -> bool:
+    """Whether the airbag that acts in the mode's occupant model deployed."""
+    if mode is ImpactMode.NEAR_SIDE:
+        return occupant.side_airbag is AirbagState.DEPLOYED
+    return occupant.frontal_airbag is AirbagState.DEPLOYED
+
+
 def _lpm_occupant(
     index: int,
     occupant: Occupant,
@@ -409,6 +416,11 @@ def _lpm_occupant(
 ) -> OccupantTriage | None:
     """Answer one in-coverage occupant with its occupant model; None to fall back."""
     lpm_occupant = _in_domain(occupant, index, assumptions)
+    if impact.mode is ImpactMode.NEAR_SIDE and occupant.side_airbag is None:
+        assumptions.append(
+            f"occupants[{index}]: side airbag state not reported: none assumed for the "
+            "near-side occupant model (the conservative choice)"
+        )
     nominal = _run(pulse, impact, lpm_occupant, params)
     if nominal.assessment is None:
         assumptions.append(
@@ -431,7 +443,7 @@ def _lpm_occupant(
                 impact.mode,
                 occupant.body,
                 occupant.belted,
-                occupant.frontal_airbag is AirbagState.DEPLOYED,
+                _mode_airbag_deployed(occupant, impact.mode),
             )
             uncertainty = family.propagate(
                 delta_v_kmh=pulse.delta_v_kmh,

@@ -82,7 +82,7 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         "haversine": {"amplitude_g": 31.72, "duration_ms": 100.0, "r_squared": 1.0},
     },
     "assumptions": [],
-    "engine_version": "0.1.0",
+    "engine_version": "0.2.0",
     "models": {
         "baseline": {
             "version": "1.0.0",
@@ -90,19 +90,19 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         },
         "lpm_parameters:compact_sedan": {
             "version": "compact_sedan",
-            "sha256": "c3d61671270aadf0bc0e406b14057368f3db6aedf6f0ebbd9f7aed039e72d040",
+            "sha256": "956c258fe725bd733a312f719623dc94069c9262d36b9358349d0992456d1aa1",
         },
         "lpm_code": {
-            "version": "0.1.0",
-            "sha256": "4c24f0b4f3f4abba7e5b7c0ae7564212e0cfa75028c58bcbbec1c6e260044887",
+            "version": "0.2.0",
+            "sha256": "f18c89fb29645522e145e507dd8b49737a19860acca2d1f5ad1f40d5d697ed66",
         },
         "risk_calibration": {
             "version": "1",
-            "sha256": "755e65600083bbdc760e14af7924dbca4b49f81004df31bdfa5e86bacc295a6c",
+            "sha256": "4811df3c925fe85a84800deb135d25e010ab786df25562441ef01616113e0aa5",
         },
         "surrogates": {
-            "version": "3.0.1.0",
-            "sha256": "4c642c2c25ac99bb80dfbe8659e4d096d0530001c347f1a5e13a7d74e7f26ce5",
+            "version": "3.0.2.0",
+            "sha256": "76f2b2126c7b339273c9b815466e783713169f699fc1ee065884a7a9a9bd280d",
         },
     },
     "timings_ms": {"pulse": 0.9, "occupants": 12.4, "engine_total": 13.3},

@@ -254,6 +254,12 @@ class OccupantIn(WireModel):
     frontal_airbag: engine.AirbagState = Field(
         description="Frontal airbag in front of this occupant."
     )
+    side_airbag: engine.AirbagState | None = Field(
+        default=None,
+        description="Side (thorax) and curtain airbags on this occupant's side of the car "
+        "(VEDS AirbagCategoryCode SIDE / CURTAIN). They act in a near-side crash. Omitted: "
+        "none assumed (the conservative choice; reported as an assumption).",
+    )
     airbag_fire_time_ms: float | None = Field(
         default=None, ge=0.0, le=300.0, description="Time from time zero to airbag firing, ms."
     )
@@ -307,6 +313,7 @@ class OccupantIn(WireModel):
                 body=body,
                 belted=self.belted,
                 frontal_airbag=self.frontal_airbag,
+                side_airbag=self.side_airbag,
                 age_years=self.age_years,
                 sex=self.sex,
                 airbag_fire_time_ms=self.airbag_fire_time_ms,
@@ -362,7 +369,8 @@ EXAMPLE_NOTIFICATIONS: dict[str, dict[str, Any]] = {
     "delta_v": {
         "summary": "Near-side crash, EDR delta-V record",
         "description": "49 CFR 563 record at 10 ms: a left-side impact on a left-hand-drive "
-        "car; the driver is on the near side, the passenger on the far side.",
+        "car; the driver is on the near side (her side and curtain airbags deployed), the "
+        "passenger on the far side.",
         "value": {
             "event_id": "tsp-7d1c2a90-0002",
             "occurred_at": "2026-11-23T09:02:11+01:00",
@@ -386,6 +394,7 @@ EXAMPLE_NOTIFICATIONS: dict[str, dict[str, Any]] = {
                     "sex": "female",
                     "belted": True,
                     "frontal_airbag": "not_deployed",
+                    "side_airbag": "deployed",
                 },
                 {
                     "seat": "front_passenger",
@@ -394,6 +403,7 @@ EXAMPLE_NOTIFICATIONS: dict[str, dict[str, Any]] = {
                     "sex": "male",
                     "belted": False,
                     "frontal_airbag": "not_deployed",
+                    "side_airbag": "not_deployed",
                 },
             ],
         },

@@ -50,6 +50,10 @@ class Restraints:
     airbag_equipped : bool
         The seat has a frontal airbag (deployed or not): the shoulder belt then
         has the lower load limit ``frontal.belt.load_limit_airbag``.
+    side_airbag : bool
+        Side (thorax) and curtain airbag deployed on the struck side (near side only).
+    side_airbag_fire_s : float
+        Their firing time, s (ignored without them).
     """
 
     airbag: bool
@@ -57,6 +61,8 @@ class Restraints:
     belted: bool
     pretensioner_fire_s: float | None
     airbag_equipped: bool = False
+    side_airbag: bool = False
+    side_airbag_fire_s: float = math.nan
 
 
 @dataclass(frozen=True)
@@ -185,6 +191,39 @@ def _point(q: np.ndarray, ll: np.ndarray, k: int, p: float, r: float) -> np.ndar
     jz = np.zeros(K.NQ)
     px, pz, _, _ = K.kin(q, np.zeros(K.NQ), ll, k, p, r, jx, jz, 1.0)
     return np.array([px, pz])
+
+
+#: Clearance (m) a side airbag leaves to the occupant it deploys toward when the
+#: gap is narrower than the bag (see :func:`_gap_filling_bag`). [R]
+SIDE_BAG_CLEARANCE = 0.005
+
+
+def _gap_filling_bag(c: ContactSpec, q0: np.ndarray, ll: np.ndarray, depth: float) -> ContactSpec:
+    """A side-airbag contact whose bag, fully deployed, stops short of the occupant.
+
+    A bag deploying into a gap narrower than its depth (``side.airbag.depth``)
+    fills the gap instead of striking a normally seated occupant: the bag
+    surface is set back by the difference (less :data:`SIDE_BAG_CLEARANCE`) and
+    the give shortened by as much, so that the door or window behind the bag
+    (where the contact bottoms) stays where it is.
+    """
+    pos = _point(q0, ll, c.k_body if c.k_body <= 4 else 2, c.p, c.r)
+    a, b = np.array(c.a), np.array(c.b)
+    e = (b - a) / float(np.linalg.norm(b - a))
+    gap = abs(float(e[0] * (pos[1] - a[1]) - e[1] * (pos[0] - a[0]))) - c.radius
+    shift = max(0.0, depth - (gap - SIDE_BAG_CLEARANCE))
+    if shift == 0.0:
+        return c
+    normal_away = np.array([e[1], -e[0]])  # unit normal; orient it away from the occupant
+    if float(np.dot(normal_away, pos - a)) > 0.0:
+        normal_away = -normal_away
+    a2, b2 = a + shift * normal_away, b + shift * normal_away
+    return replace(
+        c,
+        a=(float(a2[0]), float(a2[1])),
+        b=(float(b2[0]), float(b2[1])),
+        give=c.give - shift,
+    )
 
 
 def _seg(
@@ -784,6 +823,68 @@ def _coronal(ps: ParameterSet, occ: Occupant, rs: Restraints, far: bool) -> Mode
                 ramp=ramp,
             ),
         ]
+        # side (thorax) and curtain airbags: constant-force bags that deploy
+        # from the door and the roof rail toward the occupant and ride on the
+        # intrusion (kernel channel 3). The bag stays between the occupant and
+        # the door or window, which load the occupant through it: the direct
+        # rib-door and head-window contacts are off, and the bag's pressure rise
+        # beyond its squeeze depth stands for them until the bag and the trim
+        # behind it (the door contact's give) are used up, then the bottoming
+        # spring of every contact; the thorax bag spreads its load (its point
+        # follows only part of the rib deflection).
+        depth = ps["side.airbag.depth"]
+        bag_common = {
+            "channel": 3,
+            "law": 1,
+            "stiff": ps["side.airbag.stiffness"],
+            "stiff3": ps["side.airbag.squeeze_start"],
+            "damp": ps["side.airbag.damping"],
+            "ramp": ps["side.airbag.ramp"],
+            "enabled": rs.side_airbag,
+            "hysteresis": ps["side.airbag.hysteresis"],
+            "k_bottom": kbot,
+        }
+        contacts = [
+            replace(c, enabled=False)
+            if rs.side_airbag and c.name in ("door_rib", "window_head")
+            else c
+            for c in contacts
+        ]
+        contacts += [
+            _gap_filling_bag(
+                ContactSpec(
+                    "side_airbag_thorax",
+                    6,
+                    h_s,
+                    r_rib,
+                    0.01,
+                    *door,
+                    (-1.0, 0.0),
+                    fcap=ps["side.airbag.thorax_force"],
+                    share=ps["side.airbag.rib_share"],
+                    give=depth + ps["side.rib_give"],
+                    **bag_common,  # type: ignore[arg-type]
+                ),
+                q0,
+                ll,
+                depth,
+            ),
+            _gap_filling_bag(
+                ContactSpec(
+                    "curtain_airbag_head",
+                    *head,
+                    head_r,
+                    *window,
+                    (-up_head, 0.0),
+                    fcap=ps["side.airbag.curtain_force"],
+                    give=depth + ps["side.head_give"],
+                    **bag_common,  # type: ignore[arg-type]
+                ),
+                q0,
+                ll,
+                depth,
+            ),
+        ]
     else:
         cx, cz = ps["side.far.console_x"], ps["side.far.console_z_high"]
         sx, fx = ps["side.far.seat_x"], ps["side.far.door_x"]
@@ -894,8 +995,17 @@ def _coronal(ps: ParameterSet, occ: Occupant, rs: Restraints, far: bool) -> Mode
             )
         )
         belt_names = ("shoulder",)
-    bag = np.array([_NEVER, _NEVER + 1.0, 0.0, _NEVER, 1.0, 1.0, 0.0, 0.0])
-    return _finish("coronal", ll, mb, jt, ch, se, contacts, belts, belt_names, bag, q0, {})
+    info: dict[str, float] = {}
+    if rs.side_airbag and not far:
+        # the coronal model has no frontal airbag: its bag timing row serves the
+        # side and curtain bags (kernel channel 3); sealed bags, no venting
+        t_start = rs.side_airbag_fire_s + ps["side.airbag.delay"]
+        t_full = t_start + ps["side.airbag.fill_time"]
+        bag = np.array([t_start, t_full, ps["side.airbag.depth"], _NEVER, 1.0, 1.0, 1.0, 0.0])
+        info = {"side_airbag_fire_s": rs.side_airbag_fire_s, "side_airbag_t_full_s": t_full}
+    else:
+        bag = np.array([_NEVER, _NEVER + 1.0, 0.0, _NEVER, 1.0, 1.0, 0.0, 0.0])
+    return _finish("coronal", ll, mb, jt, ch, se, contacts, belts, belt_names, bag, q0, info)
 
 
 def _finish(

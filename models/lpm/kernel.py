@@ -88,6 +88,12 @@ _NO_NRT: dict[str, Any] = {"_nrt": False}
 #   bottoming stiffness (N/m), share of the deflection followed by k = 6 points (-)
 # Seat SE (4,): friction coefficient, normal force (N), regularisation speed (m/s),
 #   slip damping (N s/m)
+# Contacts CT (nc, NCF), one row per contact, columns CONTACT_FIELDS. The surface
+#   moves by (mx, mz) times its motion channel: 0 fixed; 1 door intrusion (m);
+#   2 frontal airbag depth (BAG timing); 3 side airbag: door intrusion plus the
+#   BAG depth along the surface normal (a bag deploying from the door or roof
+#   rail toward the occupant and riding on the intrusion). law 0: elastic(-plastic)
+#   spring-damper; law 1: airbag (constant-force plateau, pressure rise, damper)
 CONTACT_FIELDS = (
     "k_body",
     "p",
@@ -654,12 +660,23 @@ def rhs_into(
         scale = 1.0
         damp_on = 1.0
         kdep = 0.0
+        # bag deployment along the surface normal (channel 3 only), m and m/s
+        bag_d = 0.0
+        bag_v = 0.0
         if ch_id == 1.0:
             sv = s_door
             vv = v_door
-        elif ch_id == 2.0:
-            sv = depth
-            vv = ddepth
+        elif ch_id == 2.0 or ch_id == 3.0:
+            if ch_id == 2.0:
+                sv = depth
+                vv = ddepth
+            else:
+                # side airbag: deploys from the door (or the roof rail) toward
+                # the occupant along the surface normal and rides on the intrusion
+                sv = s_door
+                vv = v_door
+                bag_d = depth
+                bag_v = ddepth
             scale = bscale
             damp_on = bdamp
             kdep = bkdep
@@ -668,10 +685,10 @@ def rhs_into(
                     diag[DIAG_FIXED + c] = 0.0
                     diag[DIAG_FIXED + nc + nb + c] = 0.0
                 continue
-        ax = row[C_AX] + row[C_MX] * sv
-        az = row[C_AZ] + row[C_MZ] * sv
-        bx = row[C_BX] + row[C_MX] * sv
-        bz = row[C_BZ] + row[C_MZ] * sv
+        ax = row[C_AX] + row[C_MX] * sv + row[C_NX] * bag_d
+        az = row[C_AZ] + row[C_MZ] * sv + row[C_NZ] * bag_d
+        bx = row[C_BX] + row[C_MX] * sv + row[C_NX] * bag_d
+        bz = row[C_BZ] + row[C_MZ] * sv + row[C_NZ] * bag_d
         # one-sided surface with its outward normal toward the occupant's side
         # (surfaces only translate, so direction, length and normal are constant)
         s = ((px - ax) * row[C_UX] + (pz - az) * row[C_UZ]) / row[C_LEN]
@@ -713,8 +730,8 @@ def rhs_into(
             for a in range(NQ):
                 vpx += jx[a] * qd[a]
                 vpz += jz[a] * qd[a]
-            vsx = row[C_MX] * vv
-            vsz = row[C_MZ] * vv
+            vsx = row[C_MX] * vv + row[C_NX] * bag_v
+            vsz = row[C_MZ] * vv + row[C_NZ] * bag_v
             pendot = -((vpx - vsx) * nx + (vpz - vsz) * nz)
             fmag, fe, crate = _contact_force(
                 pen, pendot, row, scale, damp_on, kdep, y[2 * NQ + 2 * nb + c]

@@ -169,6 +169,9 @@ def resolve_restraints(
     fires with the same rule when the occupant is belted in a frontal or rear
     case, unless ``occupant.pretensioner_fired`` is False. Side modes use the
     belt as seat-slip damping (near side) or a lateral belt element (far side).
+    The side and curtain airbags act in a near-side case when the notification
+    says the occupant's side airbag deployed; they fire ``side.airbag.fire_time``
+    after the start of the pulse (side sensing sees the door intrusion at once).
     """
     dt = float(time_s[1] - time_s[0]) if time_s.size > 1 else 1e-4
     dv = _cumtrapz(acc_model, dt)
@@ -191,12 +194,16 @@ def resolve_restraints(
             pt = t_thr if t_thr is not None else fire
         elif occupant.pretensioner_fired is None and t_thr is not None:
             pt = t_thr
+    side_airbag = mode is ImpactMode.NEAR_SIDE and occupant.side_airbag is AirbagState.DEPLOYED
+    side_fire = float(time_s[0]) + params["side.airbag.fire_time"] if side_airbag else math.nan
     return Restraints(
         airbag=airbag,
         airbag_fire_s=fire,
         belted=occupant.belted,
         pretensioner_fire_s=pt,
         airbag_equipped=occupant.frontal_airbag is not AirbagState.ABSENT,
+        side_airbag=side_airbag,
+        side_airbag_fire_s=side_fire,
     )
 
 

@@ -40,6 +40,7 @@ from models.impact_mode import ImpactMode
 from models.notification import Body
 from models.surrogate.basis import design_matrix, evaluate_univariate
 from models.surrogate.spec import (
+    AIRBAG_MODES,
     FAMILIES,
     INPUT_NAMES,
     family_name,
@@ -609,8 +610,10 @@ class SurrogateLibrary:
     ) -> SurrogateFamily:
         """The family for a mode, body and restraint configuration.
 
-        Rear and side families serve both airbag states (the frontal airbag does
-        not act in those LPMs; see :mod:`models.surrogate.spec`).
+        ``airbag_deployed`` is the mode's airbag: the frontal airbag (frontal),
+        the side and curtain airbags (near side). Rear and far-side families
+        serve every airbag state (no airbag acts in those LPMs; see
+        :mod:`models.surrogate.spec`).
 
         Raises
         ------
@@ -618,7 +621,7 @@ class SurrogateLibrary:
             When the family is not in the library.
         """
         mode = ImpactMode(mode)
-        bag: bool | None = bool(airbag_deployed) if mode is ImpactMode.FRONTAL else None
+        bag: bool | None = bool(airbag_deployed) if mode in AIRBAG_MODES else None
         return self._families[family_name(mode, Body(body), bool(belted), bag)]
 
     def stale_reason(self) -> str | None:

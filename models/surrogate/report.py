@@ -164,10 +164,11 @@ def write_report(artifact_dir: Path, out_dir: Path, coverage_cases: int = 24) ->
     lines += [
         "## Design choices",
         "",
-        "- Families: frontal x {50M, 5F} x {belted, unbelted} x {airbag, no airbag} (8); rear "
-        "and near/far side x {50M, 5F} x {belted, unbelted}, shared between airbag states "
-        "because the frontal airbag does not act in those LPMs (rear: only with an explicit "
-        "firing time, which is then outside the surrogates) (12). 20 families.",
+        "- Families: frontal x {50M, 5F} x {belted, unbelted} x {airbag, no airbag} (8); near "
+        "side x {50M, 5F} x {belted, unbelted} x {side airbags, none} (8); rear and far side x "
+        "{50M, 5F} x {belted, unbelted}, shared between airbag states because no airbag acts "
+        "in those LPMs (rear: the frontal airbag only with an explicit firing time, which is "
+        "then outside the surrogates) (8). 24 families.",
         "- Inputs: delta-V 5-120 km/h (above: clamped to 120 and flagged, a lower bound since "
         "the LPMs saturate; below 5: clamped), |angle from the mode axis| within coverage "
         "(frontal 0-30, rear 0-40, sides 0-20 deg; the planar LPMs see only the on-axis "

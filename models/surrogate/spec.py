@@ -39,6 +39,7 @@ from models.lpm.domain import POSTURE_RANGE_DEG, SEAT_TRACK_RANGE_MM
 from models.notification import Body
 
 __all__ = [
+    "AIRBAG_MODES",
     "ANGLE_RANGE_DEG",
     "DELTA_V_PIECES_KMH",
     "DELTA_V_RANGE_KMH",
@@ -261,7 +262,9 @@ class FamilySpec:
     body : Body
     belted : bool
     airbag_deployed : bool or None
-        None when the family serves both airbag states (rear and side modes).
+        The airbag that acts in the mode's LPM deployed or not: the frontal
+        airbag (frontal), the side and curtain airbags (near side); None when
+        the family serves every airbag state (rear, far side).
     ranges : tuple of (low, high)
         Design range of each input of :data:`INPUT_NAMES`.
     outputs : tuple of str
@@ -276,16 +279,29 @@ class FamilySpec:
     outputs: tuple[str, ...]
 
 
+#: Modes whose LPM has an airbag that splits the families: the frontal airbag
+#: (frontal) and the side and curtain airbags (near side).
+AIRBAG_MODES: Final[frozenset[ImpactMode]] = frozenset({ImpactMode.FRONTAL, ImpactMode.NEAR_SIDE})
+
+
 def family_name(mode: ImpactMode, body: Body, belted: bool, airbag: bool | None) -> str:
-    """File-safe family name, e.g. ``frontal__male_50th__belted__airbag``."""
-    bag = "airbag_any" if airbag is None else ("airbag" if airbag else "no_airbag")
+    """File-safe family name, e.g. ``frontal__male_50th__belted__airbag``.
+
+    ``airbag`` is the mode's airbag (see :class:`FamilySpec`); near-side names
+    say ``side_airbag`` / ``no_side_airbag``.
+    """
+    if airbag is None:
+        bag = "airbag_any"
+    else:
+        side = "side_" if mode is ImpactMode.NEAR_SIDE else ""
+        bag = f"{side}airbag" if airbag else f"no_{side}airbag"
     return f"{mode.value}__{body.value}__{'belted' if belted else 'unbelted'}__{bag}"
 
 
 def _families() -> tuple[FamilySpec, ...]:
     out: list[FamilySpec] = []
     for mode in ImpactMode:
-        bags: tuple[bool | None, ...] = (True, False) if mode is ImpactMode.FRONTAL else (None,)
+        bags: tuple[bool | None, ...] = (True, False) if mode in AIRBAG_MODES else (None,)
         ranges = (
             DELTA_V_RANGE_KMH,
             ANGLE_RANGE_DEG[mode],
@@ -310,5 +326,6 @@ def _families() -> tuple[FamilySpec, ...]:
     return tuple(out)
 
 
-#: Every family the full build produces (20: frontal 8, rear, near side, far side 4 each).
+#: Every family the full build produces (24: frontal and near side 8 each, rear and far
+#: side 4 each).
 FAMILIES: Final[tuple[FamilySpec, ...]] = _families()

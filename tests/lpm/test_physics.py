@@ -104,7 +104,9 @@ def _penetration_ok(
     for i, name in enumerate(names):
         pen = float(np.max(r.histories[f"penetration_{name}_m"]))
         law, give, depth = ct[i, K.C_LAW], ct[i, K.C_GIVE], 0.0
-        if law == 1.0:  # airbag: the bag face may be pushed back to the wheel, not through it
+        if law == 1.0 and ct[i, K.C_CH] == 3.0:  # side airbag: its depth and the trim behind
+            give += ct[i, K.C_RAD]
+        elif law == 1.0:  # airbag: the bag face may be pushed back to the wheel, not through it
             give = r.info["airbag_depth_m"] + ct[i, K.C_RAD]
         elif ct[i, K.C_BCAP] > 0.0:  # crushable structure: its permanent crush adds
             give += float(np.max(r.histories[f"crush_{name}_m"]))

@@ -23,7 +23,8 @@ sources reachable here; the published values closest to the class are the
 IIHS moderate-overlap results (64 km/h, 40 % offset deformable barrier,
 Hybrid III 50M driver, airbag and belt): IIHS microcar data table (2012 Scion
 iQ HIC15 222, Nij 0.31, chest 28 mm; 2011 Smart Fortwo 234, 0.30, 22 mm; 2008
-Smart Fortwo 621, 0.48, 25 mm) and the IIHS 2009 Honda Fit test (HIC 264).
+Smart Fortwo 621, 0.48, 25 mm), the IIHS 2007 Nissan Versa test (HIC15 492,
+Nij 0.37, chest 29 mm) and the IIHS 2009 Honda Fit test (HIC 264).
 The offset test is a different pulse (longer, one-sided crush), so the
 model's NCAP-pulse values are compared with the published span widened by a
 stated 25 % on each side, not calibrated to it.
@@ -71,7 +72,7 @@ def test_ncap_frontal_belted_airbag_50m_inside_published_ranges(params: Paramete
 PUBLISHED_SMALL_CAR = {
     "hic15": (222.0, 621.0),
     "nij": (0.30, 0.48),
-    "chest_deflection_mm": (22.0, 28.0),
+    "chest_deflection_mm": (22.0, 29.0),
 }
 #: Allowance for the different test (offset deformable barrier at 64 km/h vs
 #: the full-width rigid barrier at 56 km/h) [R].

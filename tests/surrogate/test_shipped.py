@@ -56,16 +56,16 @@ def test_shipped_heldout_pooled() -> None:
 
 
 def test_shipped_heldout_agreement_target() -> None:
-    """Issue 5 target on the pooled held-out points of the 20 families (97.9 %
-    with the 600-run designs; REPORT.md Table B)."""
+    """Issue 5 target on the pooled held-out points of the 24 families (REPORT.md
+    Table B)."""
     _, agreement = _pooled_heldout()
     assert agreement > 0.97, agreement
 
 
 def test_shipped_heldout_agreement_at_the_service_decision() -> None:
-    """Pooled over the 20 families, the surrogate and the LPM take the same decision as
+    """Pooled over the 24 families, the surrogate and the LPM take the same decision as
     the service does (zero-load-corrected P(ISS >= 15) against the mode's threshold) on
-    more than 97 % of the held-out points (98.0 %, REPORT.md)."""
+    more than 97 % of the held-out points (REPORT.md)."""
     import numpy as np
 
     from models.surrogate.evaluate import default_artifact_dir
