@@ -667,8 +667,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         timings = {}
     timings.setdefault("families", {}).update({r["family"]: r for r in results})
     # families that are no longer built (a split or renamed family) drop out
-    names = {spec.name for spec in FAMILIES}
-    timings["families"] = {k: v for k, v in timings["families"].items() if k in names}
+    built = {spec.name for spec in FAMILIES}
+    timings["families"] = {k: v for k, v in timings["families"].items() if k in built}
     if len(results) == len(FAMILIES):
         timings["total_seconds"] = total
         timings["workers"] = args.workers
