@@ -72,6 +72,9 @@ FloatArray = npt.NDArray[np.float64]
 
 #: NASS ``dvcat`` bands in order (labels as in the data).
 BANDS: tuple[str, ...] = tuple(DELTA_V_BAND_MIDPOINTS_KMH)
+#: Frontal thresholds tabulated (the service's 0.10 among them; 0.02 Lubbe & Kiuchi,
+#: 0.20 CDC 2008: crash-data-and-triage.md section 1).
+THRESHOLDS: tuple[float, ...] = (0.02, 0.03, 0.05, 0.075, 0.10, 0.15, 0.20)
 
 
 @dataclass(frozen=True)
@@ -188,6 +191,9 @@ class FieldCheck:
     over_triage: float
     #: per dvcat band: (n, observed weighted serious rate, mean LPM P, mean baseline P)
     by_band: dict[str, tuple[int, float, float, float]]
+    #: per frontal threshold on the LPM's corrected P: (flagged share, sensitivity,
+    #: over-triage), weighted
+    by_threshold: dict[float, tuple[float, float, float]]
     y: FloatArray
     weight: FloatArray
     p_lpm: FloatArray
@@ -228,6 +234,10 @@ def run_field_check(models: EngineModels, csv_path: Path | None = None) -> Field
                 float(np.average(p_lpm[m], weights=w[m])),
                 float(np.average(p_base[m], weights=w[m])),
             )
+    by_threshold = {}
+    for t in THRESHOLDS:
+        ut_t, ot_t = triage_rates(y, p_lpm, w, t)
+        by_threshold[t] = (float(np.average(p_lpm >= t, weights=w)), 1.0 - ut_t, ot_t)
     return FieldCheck(
         n=len(cases),
         prevalence=float(np.average(y, weights=w)),
@@ -239,6 +249,7 @@ def run_field_check(models: EngineModels, csv_path: Path | None = None) -> Field
         flagged_share=float(np.average(p_lpm >= threshold, weights=w)),
         over_triage=ot,
         by_band=by_band,
+        by_threshold=by_threshold,
         y=y,
         weight=w,
         p_lpm=p_lpm,
@@ -271,6 +282,19 @@ def _markdown(fc: FieldCheck) -> str:
     ]
     for band, (n, obs, p_l, p_b) in fc.by_band.items():
         lines.append(f"| {band} | {n:,} | {obs:.3f} | {p_l:.3f} | {p_b:.3f} |")
+    lines += [
+        "",
+        "The frontal decision at other thresholds on the same corrected P (a choice for the",
+        "trauma system; sensitivity and over-triage against the police-serious outcome):",
+        "",
+        "| threshold | flagged | sensitivity | over-triage |",
+        "|---:|---:|---:|---:|",
+    ]
+    for t, (flagged, se, ot) in fc.by_threshold.items():
+        mark = " (service)" if t == fc.threshold else ""
+        lines.append(
+            f"| {t:.3f}{mark} | {100 * flagged:.1f} % | {100 * se:.1f} % | {100 * ot:.1f} % |"
+        )
     lines += [
         "",
         "Reading: the LPM probability is of ISS >= 15 for a dummy in a 2010 compact sedan,",

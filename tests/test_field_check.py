@@ -49,6 +49,11 @@ def test_the_decision_figures_are_consistent(check: FieldCheck) -> None:
     assert check.sensitivity == pytest.approx(w[pos & flagged].sum() / w[pos].sum())
     assert check.flagged_share == pytest.approx(w[flagged].sum() / w.sum())
     assert 0.0 < check.sensitivity < 1.0
+    assert check.by_threshold[check.threshold] == pytest.approx(
+        (check.flagged_share, check.sensitivity, check.over_triage)
+    )
+    rows = list(check.by_threshold.values())
+    assert all(b[1] <= a[1] and b[2] <= a[2] for a, b in zip(rows, rows[1:], strict=False))
 
 
 def test_the_probabilities_are_the_services_own(models: EngineModels) -> None:
