@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from pathlib import Path
 
 import numpy as np
+import numpy.typing as npt
 
 from models.impact_mode import ImpactMode
 from models.injury.criteria import (
@@ -13,12 +15,32 @@ from models.injury.criteria import (
     FMVSS208_HIC15_LIMIT,
     NIJ_INTERCEPTS,
 )
+from models.injury.filters import cfc_filter
 from models.lpm.simulate import LpmResult
 from models.notification import Body
 
 __all__ = ["plot_simulation"]
 
 _SNAP_MS = (0, 40, 60, 80, 100, 120, 150)
+
+
+def _nij_terms(
+    h: Mapping[str, npt.NDArray[np.float64]], t_ms: npt.NDArray[np.float64], body: Body
+) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64]]:
+    """The two normalised terms of Nij over time, as the measure computes them.
+
+    The neck channels filtered at CFC 600, the moment taken at the occipital
+    condyle, each term divided by the intercept of its own sign (tension or
+    compression, flexion or extension), as in :func:`models.injury.criteria.nij`
+    (whose peak over time of their sum is the reported Nij).
+    """
+    ic = NIJ_INTERCEPTS[body]
+    fs = 1000.0 / float(t_ms[1] - t_ms[0])
+    fx, fz, my = (cfc_filter(h[k], fs, 600) for k in ("neck_fx_n", "neck_fz_n", "neck_my_nm"))
+    moc = my - ic.condyle_offset_m * fx
+    n_force = np.where(fz >= 0.0, fz / ic.tension_n, -fz / ic.compression_n)
+    n_moment = np.where(moc >= 0.0, moc / ic.flexion_nm, -moc / ic.extension_nm)
+    return n_force, n_moment
 
 
 def plot_simulation(
@@ -84,11 +106,11 @@ def plot_simulation(
     ax.set_ylabel("acceleration (g)")
 
     ax = axes[1, 0]
-    nij_c = NIJ_INTERCEPTS[body]
-    ax.plot(t_ms, h["neck_fz_n"] / nij_c.tension_n, label="Fz / Fzc (tension)")
-    ax.plot(t_ms, h["neck_my_nm"] / nij_c.flexion_nm, label="My / Myc (flexion)")
+    n_force, n_moment = _nij_terms(h, t_ms, body)
+    ax.plot(t_ms, n_force, label="Fz / Fzc (tension or compression)")
+    ax.plot(t_ms, n_moment, label="Moc / Myc (flexion or extension)")
+    ax.plot(t_ms, n_force + n_moment, "k", lw=0.8, label="Nij(t)")
     ax.axhline(1.0, color="r", ls="--")
-    ax.axhline(-1.0, color="r", ls="--")
     nij = result.measures.nij
     ax.set_title(f"upper neck: Nij = {nij:.2f} (limit 1.0)" if nij is not None else "neck")
     ax.set_xlabel("t (ms)")
