@@ -14,7 +14,7 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
     "triage": {
         "iss15_plus": False,
         "probability": 0.03724,
-        "probability_ci95": [0.01729, 0.05304],
+        "probability_ci95": [0.008391, 0.0681],
         "threshold": 0.1,
         "recommendation": "No telemetry indication of ISS 15 or more: destination by EMS "
         "field assessment under local protocol.",
@@ -57,7 +57,7 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
             "triage": {
                 "iss15_plus": False,
                 "probability": 0.03724,
-                "probability_ci95": [0.01729, 0.05304],
+                "probability_ci95": [0.008391, 0.0681],
                 "threshold": 0.1,
                 "recommendation": "No telemetry indication of ISS 15 or more: destination by EMS "
                 "field assessment under local protocol.",

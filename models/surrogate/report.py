@@ -118,7 +118,12 @@ def _fmt(v: float) -> str:
     return f"{v:.3g}"
 
 
-def write_report(artifact_dir: Path, out_dir: Path, coverage_cases: int = 24) -> Path:
+#: Cases of the coverage check in the report: about 35 s of direct LPM runs; with
+#: 24 the share moved by +-8 points between draws of the same library.
+COVERAGE_CASES = 120
+
+
+def write_report(artifact_dir: Path, out_dir: Path, coverage_cases: int = COVERAGE_CASES) -> Path:
     """Write ``REPORT.md`` and ``report_*.png`` into `out_dir` from the artifacts.
 
     Parameters
@@ -266,9 +271,18 @@ def write_report(artifact_dir: Path, out_dir: Path, coverage_cases: int = 24) ->
             f"{hits} of {len(cov)} cases ({100 * hits / len(cov):.0f}%) have the Monte Carlo "
             f"value (mean of {N_SENSOR_SAMPLES} direct LPM runs at the sensor sample points, "
             "default sensor "
-            "errors around random in-domain readings) inside the bootstrap 95% interval "
+            "errors around random in-domain readings) inside the served 95% interval "
             f"(issue 5 target: >= 90%). Cases with a non-saturated Monte Carlo value "
             f"(0.001 < P < 0.999): {open_hits} of {len(open_cases)}.",
+            "",
+            "The served interval is the bootstrap interval widened on the logit scale by a "
+            "factor calibrated on each family's held-out LPM runs (split-conformal, the 95% "
+            "quantile of |logit P_LPM - logit P_PCE| over the bootstrap standard deviation, "
+            "over 1.96): the replicates see how the fit moves with the design, not the error "
+            "of the polynomial where the LPM response has kinks (the bare bootstrap interval "
+            "covered 84% of 73 non-saturated cases of this check). Factors: "
+            + "; ".join(f"{f.name} {f.p_interval_inflation:.2f}" for f in fams)
+            + ".",
             "",
             "| family | dv, angle, posture, seat, T | P surrogate | 95% interval | P Monte Carlo |"
             " inside |",
@@ -348,7 +362,7 @@ def write_report(artifact_dir: Path, out_dir: Path, coverage_cases: int = 24) ->
         "",
         "`report_p_iss15_band.png`: P(ISS>=15) of frontal families against delta-V at the "
         "nominal posture, seat track and 90 ms duration, with the default sensor errors; the "
-        "band is the bootstrap 95% interval, the dots the mean P(ISS>=15) of direct LPM runs "
+        "band is the served 95% interval, the dots the mean P(ISS>=15) of direct LPM runs "
         "at the same sensor samples (paper Figure 8 analogue).",
         "",
     ]
