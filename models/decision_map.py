@@ -35,10 +35,9 @@ from models.notification import (
     AirbagState,
     Body,
     CrashNotification,
-    DriveSide,
     Occupant,
     Seat,
-    SummaryPulse,
+    summary_notification,
 )
 from models.triage import EngineModels, load_engine_models, triage
 
@@ -92,14 +91,8 @@ def _notification(
             AirbagState.DEPLOYED if airbag and mode is ImpactMode.NEAR_SIDE else AirbagState.ABSENT
         ),
     )
-    return CrashNotification(
-        event_id="decision-map",
-        vehicle_model="compact_sedan",
-        drive_side=DriveSide.LEFT,
-        pulse=SummaryPulse(delta_v_kmh=delta_v_kmh, pdof_deg=MODE_PDOF_DEG[mode]),
-        multiple_impacts=False,
-        rollover=False,
-        occupants=(occupant,),
+    return summary_notification(
+        (occupant,), delta_v_kmh, MODE_PDOF_DEG[mode], event_id="decision-map"
     )
 
 

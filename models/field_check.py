@@ -57,11 +57,9 @@ from models.injury.assessment import assess
 from models.notification import (
     AirbagState,
     Body,
-    CrashNotification,
-    DriveSide,
     Occupant,
     Seat,
-    SummaryPulse,
+    summary_notification,
 )
 from models.risk_calibration import corrected_probability, zero_load_probability
 from models.triage import LPM_THRESHOLDS, EngineModels, load_engine_models, simulate_notification
@@ -152,14 +150,8 @@ def lpm_probabilities(cases: Sequence[FieldCase], models: EngineModels) -> Float
         occupant = Occupant(
             seat=case.seat, body=key[4], belted=case.belted, frontal_airbag=case.frontal_airbag
         )
-        notification = CrashNotification(
-            event_id="field-check",
-            vehicle_model="compact_sedan",
-            drive_side=DriveSide.LEFT,
-            pulse=SummaryPulse(delta_v_kmh=case.delta_v_kmh, pdof_deg=0.0),
-            multiple_impacts=False,
-            rollover=False,
-            occupants=(occupant,),
+        notification = summary_notification(
+            (occupant,), case.delta_v_kmh, 0.0, event_id="field-check"
         )
         _, sims, _ = simulate_notification(notification, models)
         result = sims[0].result

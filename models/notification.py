@@ -28,6 +28,7 @@ __all__ = [
     "Seat",
     "Sex",
     "SummaryPulse",
+    "summary_notification",
 ]
 
 #: Neutral lumbar flexion of a seated occupant, deg. Reference paper
@@ -189,3 +190,40 @@ class CrashNotification:
     multiple_impacts: bool
     rollover: bool
     occupants: tuple[Occupant, ...]
+
+
+def summary_notification(
+    occupants: tuple[Occupant, ...],
+    delta_v_kmh: float,
+    pdof_deg: float,
+    *,
+    event_id: str = "engine",
+    vehicle_model: str = "compact_sedan",
+    drive_side: DriveSide = DriveSide.LEFT,
+) -> CrashNotification:
+    """A single-impact notification with a summary pulse (the engine's reports and checks).
+
+    Parameters
+    ----------
+    occupants : tuple of Occupant
+    delta_v_kmh : float
+        Resultant delta-V, km/h.
+    pdof_deg : float
+        Principal direction of force, deg clockwise from straight ahead.
+    event_id, vehicle_model : str, optional
+    drive_side : DriveSide, optional
+
+    Returns
+    -------
+    CrashNotification
+        No rollover, no multiple impacts.
+    """
+    return CrashNotification(
+        event_id=event_id,
+        vehicle_model=vehicle_model,
+        drive_side=drive_side,
+        pulse=SummaryPulse(delta_v_kmh=delta_v_kmh, pdof_deg=pdof_deg),
+        multiple_impacts=False,
+        rollover=False,
+        occupants=occupants,
+    )

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from models.field_check import BANDS, FieldCheck, field_cases, lpm_probabilities, run_field_check
-from models.notification import Body, CrashNotification, DriveSide, Occupant, SummaryPulse
+from models.notification import Body, Occupant, summary_notification
 from models.triage import EngineModels, load_engine_models, triage
 
 
@@ -63,23 +63,14 @@ def test_the_probabilities_are_the_services_own(models: EngineModels) -> None:
     sample = [cases[i] for i in rng.choice(len(cases), size=4, replace=False)]
     expected = lpm_probabilities(sample, models)
     for case, p in zip(sample, expected, strict=True):
-        notification = CrashNotification(
-            event_id="field-check-test",
-            vehicle_model="compact_sedan",
-            drive_side=DriveSide.LEFT,
-            pulse=SummaryPulse(delta_v_kmh=case.delta_v_kmh, pdof_deg=0.0),
-            multiple_impacts=False,
-            rollover=False,
-            occupants=(
-                Occupant(
-                    seat=case.seat,
-                    body=Body.MALE_50TH if case.male else Body.FEMALE_5TH,
-                    belted=case.belted,
-                    frontal_airbag=case.frontal_airbag,
-                    age_years=case.age_years,
-                ),
-            ),
+        occupant = Occupant(
+            seat=case.seat,
+            body=Body.MALE_50TH if case.male else Body.FEMALE_5TH,
+            belted=case.belted,
+            frontal_airbag=case.frontal_airbag,
+            age_years=case.age_years,
         )
+        notification = summary_notification((occupant,), case.delta_v_kmh, 0.0)
         occ = triage(notification, models).occupants[0]
         assert occ.method == "lpm"
         assert occ.triage.probability == p

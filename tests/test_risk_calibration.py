@@ -11,10 +11,9 @@ from models.notification import (
     AirbagState,
     Body,
     CrashNotification,
-    DriveSide,
     Occupant,
     Seat,
-    SummaryPulse,
+    summary_notification,
 )
 from models.risk_calibration import (
     CALIBRATION_VERSION,
@@ -85,23 +84,14 @@ def test_abbott_correction_properties() -> None:
 
 
 def _notification(delta_v: float, pdof: float, age: float | None = 40.0) -> CrashNotification:
-    return CrashNotification(
-        event_id="cal",
-        vehicle_model="compact_sedan",
-        drive_side=DriveSide.LEFT,
-        pulse=SummaryPulse(delta_v_kmh=delta_v, pdof_deg=pdof),
-        multiple_impacts=False,
-        rollover=False,
-        occupants=(
-            Occupant(
-                seat=Seat.DRIVER,
-                body=Body.MALE_50TH,
-                belted=True,
-                frontal_airbag=AirbagState.DEPLOYED,
-                age_years=age,
-            ),
-        ),
+    occupant = Occupant(
+        seat=Seat.DRIVER,
+        body=Body.MALE_50TH,
+        belted=True,
+        frontal_airbag=AirbagState.DEPLOYED,
+        age_years=age,
     )
+    return summary_notification((occupant,), delta_v, pdof, event_id="cal")
 
 
 @pytest.mark.parametrize(("delta_v", "pdof"), [(56.0, 0.0), (30.0, 270.0), (45.0, 180.0)])
