@@ -80,7 +80,8 @@ _PCT: Final[tuple[float, float]] = (2.5, 97.5)
 #: calibration (logit units): where every replicate agrees (saturated P, the
 #: smallest delta-V) a residual is measured against this instead of zero. [R]
 _P_SD_FLOOR: Final[float] = 0.01
-#: Fewest held-out points for the calibration; fewer: no widening.
+#: Fewest held-out points for the calibration (a 95 % quantile of fewer is the
+#: sample maximum or worse); fewer: no widening. [R]
 _MIN_CALIBRATION_POINTS: Final[int] = 20
 _POSTURE, _SEAT = 2, 3  # columns of the sensor inputs in INPUT_NAMES
 
