@@ -146,7 +146,21 @@ def test_belt_lowers_head_and_chest_measures_at_56_kmh(params: ParameterSet, bod
         assert getattr(with_belt, k) < getattr(without, k), k
 
 
-@pytest.mark.parametrize("body", [Body.MALE_50TH])
+@pytest.mark.parametrize(
+    "body",
+    [
+        Body.MALE_50TH,
+        pytest.param(
+            Body.FEMALE_5TH,
+            marks=_known(
+                "open item: the belted 5F at mid track does not reach the wheel with the belt"
+                " alone (HIC15 105, Nij 0.48), so the bag only adds load to her head and neck"
+                " (HIC15 258, Nij 0.61; P(ISS >= 15) 0.108 -> 0.129): a short driver sits"
+                " closer to the wheel than the mid-track seat the test uses"
+            ),
+        ),
+    ],
+)
 def test_airbag_lowers_head_and_chest_measures_at_56_kmh(params: ParameterSet, body: Body) -> None:
     """The airbag keeps the belted driver's head off the wheel (HIC15, Nij).
 
