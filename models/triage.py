@@ -486,6 +486,12 @@ def _lpm_occupant(
                 f"occupants[{index}]: the direct occupant-model estimate lies outside the "
                 "surrogate's 95% interval"
             )
+        else:
+            # within the surrogate's resolution of its interval (P near 0 or 1, ISS
+            # within half a point): the interval is stretched to hold the estimate,
+            # so that an unflagged answer always lies inside its own interval
+            p_ci = (min(p_ci[0], p), max(p_ci[1], p))
+            iss_ci = (min(iss_ci[0], float(iss)), max(iss_ci[1], float(iss)))
     else:
         box = [nominal, *_sensor_box(pulse, impact, lpm_occupant, params, posture_sd, track_sd)]
         ps = [float(r.assessment.p_iss15) for r in box if r.assessment is not None]

@@ -22,12 +22,19 @@ from pathlib import Path
 
 import pytest
 from fastapi.testclient import TestClient
+from hypothesis import settings as hypothesis_settings
 from sqlalchemy import create_engine, text
 
 from service.app import create_app
 from service.auth import Role, create_api_key
 from service.settings import Settings
 from tests.support import ApiClient
+
+# Property tests draw the same examples on every run (no flaky CI); run with
+# HYPOTHESIS_PROFILE=explore to search new ones.
+hypothesis_settings.register_profile("ci", derandomize=True)
+hypothesis_settings.register_profile("explore", derandomize=False)
+hypothesis_settings.load_profile(os.environ.get("HYPOTHESIS_PROFILE", "ci"))
 
 # ----------------------------------------------------------------- PostgreSQL
 
