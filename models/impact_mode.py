@@ -7,7 +7,8 @@ The occupant models cover the ranges of the reference paper
 PDOF is in degrees clockwise from straight ahead (0 frontal, 90 right side,
 180 rear, 270 left side). Between the ranges no occupant model applies and the
 triage falls back to the statistical baseline; the nearest mode is still
-reported so that cases can be filtered by mode.
+reported so that cases can be filtered by mode. Second-row occupants get their
+mode (the rear middle one sees a side impact as far side) but no occupant model.
 """
 
 from __future__ import annotations
@@ -69,7 +70,8 @@ class ImpactClassification:
     mode : ImpactMode
         The mode whose axis is nearest the PDOF (reported even out of coverage).
     in_lpm_coverage : bool
-        True when the PDOF lies inside that mode's coverage range.
+        True when the PDOF lies inside that mode's coverage range and the
+        occupant sits in the front row (the occupant models are of the front row).
     pdof_deg : float
         PDOF normalised to [0, 360), deg.
     axis_deg : float
@@ -88,11 +90,18 @@ class ImpactClassification:
     frontal_nass: bool
 
 
-def occupant_side(seat: Seat, drive_side: DriveSide) -> DriveSide:
-    """Side of the vehicle the occupant sits on (the driver sits on `drive_side`)."""
+def occupant_side(seat: Seat, drive_side: DriveSide) -> DriveSide | None:
+    """Side of the vehicle the occupant sits on (the driver sits on `drive_side`).
+
+    None for the rear middle seat, which is on neither side.
+    """
     if seat is Seat.DRIVER:
         return drive_side
-    return DriveSide.RIGHT if drive_side is DriveSide.LEFT else DriveSide.LEFT
+    if seat is Seat.FRONT_PASSENGER:
+        return DriveSide.RIGHT if drive_side is DriveSide.LEFT else DriveSide.LEFT
+    if seat is Seat.REAR_MIDDLE:
+        return None
+    return DriveSide.LEFT if seat is Seat.REAR_LEFT else DriveSide.RIGHT
 
 
 def _signed_difference(a_deg: float, b_deg: float) -> float:
@@ -122,7 +131,10 @@ def classify_impact(pdof_deg: float, seat: Seat, drive_side: DriveSide) -> Impac
     ImpactClassification
     """
     pdof = float(pdof_deg) % 360.0
-    on_left = occupant_side(seat, drive_side) is DriveSide.LEFT
+    side = occupant_side(seat, drive_side)
+    # the rear middle occupant is away from both doors: a side impact is a far-side
+    # impact for them (taken as sitting opposite the struck side)
+    on_left = side is DriveSide.LEFT if side is not None else pdof < 180.0
     best: tuple[float, ImpactMode, float, bool] | None = None
     for mode, (start, end) in COVERAGE_DEG.items():
         axis = _AXIS_RIGHT[mode]
@@ -141,7 +153,8 @@ def classify_impact(pdof_deg: float, seat: Seat, drive_side: DriveSide) -> Impac
         axis = 360.0 - axis
     return ImpactClassification(
         mode=mode,
-        in_lpm_coverage=covered,
+        # the occupant models are of the front row
+        in_lpm_coverage=covered and seat.front_row,
         pdof_deg=pdof,
         axis_deg=axis % 360.0,
         angle_from_axis_deg=_signed_difference(pdof, axis),

@@ -37,10 +37,22 @@ NEUTRAL_LUMBAR_FLEXION_DEG = 5.8
 
 
 class Seat(StrEnum):
-    """Front-row seat of the occupant."""
+    """Seat of the occupant (VEDS VehicleSeatLocationCategoryCode 1-5).
+
+    The occupant models are of the front row; the engine answers second-row
+    occupants with the statistical baseline (:attr:`front_row`).
+    """
 
     DRIVER = "driver"
     FRONT_PASSENGER = "front_passenger"
+    REAR_LEFT = "rear_left"
+    REAR_MIDDLE = "rear_middle"
+    REAR_RIGHT = "rear_right"
+
+    @property
+    def front_row(self) -> bool:
+        """The driver's and the front passenger's seats."""
+        return self in (Seat.DRIVER, Seat.FRONT_PASSENGER)
 
 
 class Body(StrEnum):
@@ -138,7 +150,7 @@ Pulse = AccelerationPulse | DeltaVPulse | SummaryPulse
 
 @dataclass(frozen=True)
 class Occupant:
-    """One front-row occupant and the restraint state around them.
+    """One occupant (front or second row) and the restraint state around them.
 
     Attributes
     ----------

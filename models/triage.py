@@ -589,6 +589,11 @@ def triage(notification: CrashNotification, models: EngineModels) -> TriageResul
                 i, occupant, impact, pulse, params, models, baseline, assumptions
             )
             used_lpm = used_lpm or answer is not None
+        elif not occupant.seat.front_row:
+            assumptions.append(
+                f"occupants[{i}]: {occupant.seat.value} seat: the occupant models are of the "
+                "front row; statistical baseline used (fitted on front-seat occupants)"
+            )
         else:
             assumptions.append(
                 f"occupants[{i}]: PDOF {impact.pdof_deg:.0f} deg is outside every occupant "

@@ -236,7 +236,7 @@ class CrashIn(WireModel):
 
 
 class OccupantIn(WireModel):
-    """One front-row occupant and the restraints around them."""
+    """One occupant (front or second row) and the restraints around them."""
 
     seat: engine.Seat = Field(description="Seat of the occupant.")
     body: engine.Body | None = Field(
@@ -457,7 +457,10 @@ class CrashNotificationIn(WireModel):
     vehicle: VehicleIn = Field(default_factory=VehicleIn, description="The vehicle.")
     crash: CrashIn = Field(description="The crash measurements.")
     occupants: list[OccupantIn] = Field(
-        min_length=1, max_length=2, description="Front-row occupants, one per seat."
+        min_length=1,
+        max_length=5,
+        description="Occupants, one per seat: the front row (occupant models) and the "
+        "second row (answered by the statistical baseline).",
     )
 
     model_config = ConfigDict(

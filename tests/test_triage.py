@@ -221,3 +221,43 @@ def test_a_minor_side_crash_is_not_sent_to_a_trauma_center(
     assert occ.impact.mode in (ImpactMode.NEAR_SIDE, ImpactMode.FAR_SIDE)
     assert occ.iss.estimate < 15
     assert occ.triage.iss15_plus is False
+
+
+@pytest.mark.parametrize("seat", [Seat.REAR_LEFT, Seat.REAR_MIDDLE, Seat.REAR_RIGHT])
+def test_second_row_occupants_are_answered_by_the_baseline(
+    models: EngineModels, seat: Seat
+) -> None:
+    """A family car: the front row keeps its occupant models, the second row gets the
+    statistical baseline with the reason, and nothing is refused."""
+    driver = Occupant(
+        seat=Seat.DRIVER, body=Body.MALE_50TH, belted=True, frontal_airbag=AirbagState.DEPLOYED
+    )
+    child = Occupant(
+        seat=seat, body=Body.FEMALE_5TH, belted=True, frontal_airbag=AirbagState.ABSENT
+    )
+    result = triage(_notification(56.0, 0.0, occupants=(driver, child)), models)
+    front, rear = result.occupants
+    assert front.method == "lpm"
+    assert rear.method == "baseline"
+    assert rear.impact.mode is ImpactMode.FRONTAL
+    assert not rear.impact.in_lpm_coverage
+    assert rear.triage == rear.baseline
+    assert any(f"{seat.value} seat" in a for a in result.assumptions)
+
+
+@pytest.mark.parametrize(
+    ("seat", "pdof", "mode"),
+    [
+        (Seat.REAR_LEFT, 270.0, ImpactMode.NEAR_SIDE),
+        (Seat.REAR_LEFT, 90.0, ImpactMode.FAR_SIDE),
+        (Seat.REAR_RIGHT, 90.0, ImpactMode.NEAR_SIDE),
+        (Seat.REAR_MIDDLE, 90.0, ImpactMode.FAR_SIDE),
+        (Seat.REAR_MIDDLE, 270.0, ImpactMode.FAR_SIDE),
+    ],
+)
+def test_second_row_impact_modes(seat: Seat, pdof: float, mode: ImpactMode) -> None:
+    from models.impact_mode import classify_impact
+
+    impact = classify_impact(pdof, seat, DriveSide.LEFT)
+    assert impact.mode is mode
+    assert not impact.in_lpm_coverage

@@ -151,3 +151,18 @@ def test_side_airbags_reach_the_near_side_model(api: ApiClient) -> None:
     assert bags["measures"]["hic15"] < none["measures"]["hic15"]
     assert bags["iss"]["estimate"] <= none["iss"]["estimate"]
     assert bags["triage"]["probability"] <= none["triage"]["probability"]
+
+
+def test_a_notification_with_second_row_occupants_is_triaged_not_refused(
+    api: ApiClient,
+) -> None:
+    body = summary(40.0, 0.0)
+    body["occupants"] += [
+        {"seat": "rear_left", "age_years": 9, "belted": True, "frontal_airbag": "absent"},
+        {"seat": "rear_right", "age_years": 40, "belted": False, "frontal_airbag": "absent"},
+    ]
+    response = api.client.post("/v1/cases", json=body, headers=api.headers("submitter"))
+    assert response.status_code == 201, response.text
+    result = response.json()
+    assert [o["method"] for o in result["occupants"]] == ["lpm", "baseline", "baseline"]
+    assert sum("the occupant models are of the front row" in a for a in result["assumptions"]) == 2

@@ -33,7 +33,7 @@ def _acceleration(**pulse: Any) -> dict[str, Any]:
         (lambda b: b["crash"]["pulse"].update(delta_v_kmh=250.0), "crash.pulse.delta_v_kmh"),
         (lambda b: b["crash"]["pulse"].update(pdof_deg=360.0), "crash.pulse.pdof_deg"),
         (lambda b: b["crash"]["pulse"].update(kind="teleport"), "crash.pulse"),
-        (lambda b: b["occupants"][0].update(seat="rear_middle"), "occupants[0].seat"),
+        (lambda b: b["occupants"][0].update(seat="roof_rack"), "occupants[0].seat"),
         (lambda b: b["occupants"][0].update(frontal_airbag="maybe"), "occupants[0].frontal_airbag"),
         (lambda b: b["occupants"][0].update(side_airbag="curtain"), "occupants[0].side_airbag"),
         (lambda b: b["occupants"][0].update(age_years=-3), "occupants[0].age_years"),
