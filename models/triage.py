@@ -41,7 +41,14 @@ from models.risk_calibration import (
     corrected_probability,
     zero_load_probability,
 )
-from models.surrogate.evaluate import SurrogateLibrary, UncertaintyResult, default_artifact_dir
+from models.surrogate.evaluate import (
+    EVALUATION_NAME,
+    EVALUATION_VERSION,
+    SurrogateLibrary,
+    UncertaintyResult,
+    default_artifact_dir,
+    evaluation_sha256,
+)
 from models.surrogate.spec import P_RESOLUTION
 
 __all__ = [
@@ -229,6 +236,9 @@ class EngineModels:
                 name="pce_surrogates",
                 version=self.surrogates.version,
                 sha256=self.surrogates.sha256,
+            )
+            infos["surrogate_evaluation"] = ModelInfo(
+                name=EVALUATION_NAME, version=EVALUATION_VERSION, sha256=evaluation_sha256()
             )
         return infos
 

@@ -572,11 +572,14 @@ class OccupantOut(OutModel):
         "abdomen_vc_m_s.",
     )
     measures_ci95: dict[str, tuple[float, float]] | None = Field(
-        default=None, description="95% interval of each measure under sensor uncertainty."
+        default=None,
+        description="95% interval of each measure under sensor uncertainty; for "
+        "`pce_bootstrap`, it includes the surrogate's own error (held-out calibrated margin).",
     )
     interval_method: str = Field(
         description="Where the 95% intervals come from: `pce_bootstrap` (surrogates, "
-        "bootstrap replicates), `lpm_sensor_box` (direct runs over the +/-1.96 SD sensor "
+        "bootstrap replicates, widened by margins calibrated on held-out occupant-model "
+        "runs), `lpm_sensor_box` (direct runs over the +/-1.96 SD sensor "
         "box), or `coefficient_covariance` (the baseline's coefficients)."
     )
     point_outside_interval: bool = Field(

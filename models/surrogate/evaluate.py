@@ -20,11 +20,17 @@ Propagation (reference paper section 2.5; issue 5)
 * Measures and ISS: the point value is the point PCE at the (clamped) readings;
   the 95% interval the 2.5 and 97.5 percentiles (order statistics, "inverted
   CDF") over all sensor samples and all bootstrap replicates (sensor and
-  surrogate uncertainty together).
+  surrogate uncertainty together), widened on the fitted scale by the
+  polynomial's own error, which the replicates do not see: a bound calibrated
+  on the family's held-out LPM runs, added in quadrature on each side of the
+  point value (:meth:`SurrogateFamily._interval_factors`).
+* The evaluation is versioned (:data:`EVALUATION_VERSION`, with this module's
+  checksum) and recorded with every case beside the artifacts' checksum.
 """
 
 from __future__ import annotations
 
+import hashlib
 import json
 import math
 from collections.abc import Mapping
@@ -51,6 +57,8 @@ from models.surrogate.spec import (
 from models.surrogate.store import MANIFEST_NAME, read_artifact, sha256_file
 
 __all__ = [
+    "EVALUATION_NAME",
+    "EVALUATION_VERSION",
     "DEFAULT_POSTURE_SD_DEG",
     "DEFAULT_SEAT_TRACK_SD_MM",
     "N_SENSOR_SAMPLES",
@@ -58,10 +66,25 @@ __all__ = [
     "SurrogateLibrary",
     "UncertaintyResult",
     "default_artifact_dir",
+    "evaluation_sha256",
 ]
 
 FloatArray = npt.NDArray[np.float64]
 IntArray = npt.NDArray[np.int64]
+
+#: What turns the shipped artifacts into an answer (recorded with every case
+#: beside the artifacts' manifest checksum, so that a change of the
+#: propagation or of the interval calibration shows in the audit record).
+EVALUATION_NAME: Final[str] = "PCE sensor-uncertainty propagation and interval calibration"
+#: 1: bootstrap percentiles, P(ISS >= 15) interval widened by the held-out factor;
+#: 2: the measure and ISS intervals extended by their held-out calibrated margins.
+EVALUATION_VERSION: Final[str] = "2"
+
+
+def evaluation_sha256() -> str:
+    """SHA-256 of this module's source (the evaluation's checksum in a case record)."""
+    return hashlib.sha256(Path(__file__).read_bytes().replace(b"\r\n", b"\n")).hexdigest()
+
 
 #: z of a two-sided 95% Gaussian interval.
 _Z95: Final[float] = 1.959963984540054
@@ -84,6 +107,18 @@ _P_SD_FLOOR: Final[float] = 0.01
 #: sample maximum or worse); fewer: no widening. [R]
 _MIN_CALIBRATION_POINTS: Final[int] = 20
 _POSTURE, _SEAT = 2, 3  # columns of the sensor inputs in INPUT_NAMES
+#: Floor of the bootstrap standard deviation of a measure (fitted scale log(x +
+#: floor): 0.01 is 1 % of the value) and of ISS (points) in the interval
+#: calibration: where every replicate agrees a residual is measured against
+#: this instead of zero. [R] as :data:`_P_SD_FLOOR`.
+_FITTED_SD_FLOOR: Final[Mapping[str, float]] = MappingProxyType({"iss": 0.1})
+_FITTED_SD_FLOOR_MEASURE: Final[float] = 0.01
+
+
+def _bootstrap_sd(replicates: FloatArray, name: str) -> FloatArray:
+    """Standard deviation over the last axis (the replicates), floored for `name`."""
+    floor = _FITTED_SD_FLOOR.get(name, _FITTED_SD_FLOOR_MEASURE)
+    return np.maximum(np.std(replicates, axis=-1, ddof=1), floor)
 
 
 def default_artifact_dir() -> Path:
@@ -122,6 +157,8 @@ class UncertaintyResult:
         Each measure the mode computes at the readings (units in the names;
         HIC15 and Nij dimensionless).
     measures_ci95 : Mapping[str, (float, float)]
+        95% interval of each measure: sensor and bootstrap percentiles extended
+        by the held-out calibrated margin (:attr:`SurrogateFamily.interval_factors`).
     n_samples : int
         Sensor samples per replicate.
     n_bootstrap : int
@@ -249,6 +286,15 @@ class _Piece:
         cols = replicate + self._nb1 * np.arange(len(self.outputs))
         return np.asarray(psi @ self._coef_t[:, cols], dtype=np.float64)
 
+    def predict_raw_all(self, x: FloatArray) -> FloatArray:
+        """Fitted-scale values of every output, point PCE and replicates.
+
+        Returns an array of shape (n, n_out, B + 1).
+        """
+        psi = design_matrix(to_unit(x, self._ranges), self._recs, self._terms)
+        out = np.asarray(psi @ self._coef_t, dtype=np.float64)
+        return out.reshape(x.shape[0], len(self.outputs), self._nb1)
+
     def predict_raw_replicates(self, x: FloatArray, output: int) -> FloatArray:
         """Fitted-scale values of one output, point PCE and every replicate, shape (n, B + 1)."""
         psi = design_matrix(to_unit(x, self._ranges), self._recs, self._terms)
@@ -300,6 +346,7 @@ class SurrogateFamily:
         "_pieces",
         "meta",
         "name",
+        "interval_factors",
         "outputs",
         "p_interval_inflation",
     )
@@ -310,6 +357,9 @@ class SurrogateFamily:
     #: factor (>= 1) widening the bootstrap interval of P(ISS >= 15) on the logit
     #: scale, calibrated on the family's held-out LPM runs (:meth:`_p_inflation`)
     p_interval_inflation: float
+    #: per output (measures and ISS): the held-out calibration factor of the
+    #: 95% interval's margin, in bootstrap standard deviations (:meth:`_interval_factors`)
+    interval_factors: Mapping[str, float]
     _edges: FloatArray
     _hi: FloatArray
     _lo: FloatArray
@@ -357,7 +407,83 @@ class SurrogateFamily:
                 np.asarray(arrays["heldout_y"], dtype=np.float64)[:, outputs.index("p_iss15")],
             )
         sa(self, "p_interval_inflation", inflation)
+        factors: dict[str, float] = {}
+        if "heldout_x" in arrays and "heldout_y" in arrays:
+            factors = self._interval_factors(
+                np.asarray(arrays["heldout_x"], dtype=np.float64),
+                np.asarray(arrays["heldout_y"], dtype=np.float64),
+            )
+        sa(self, "interval_factors", MappingProxyType(factors))
         return self
+
+    def _raw_all(self, x: FloatArray) -> FloatArray:
+        """Fitted-scale outputs, point PCE and replicates, blended over the pieces.
+
+        Parameters
+        ----------
+        x : ndarray, shape (n, 5)
+            Raw inputs (not clamped).
+
+        Returns
+        -------
+        ndarray, shape (n, n_outputs, B + 1)
+        """
+        w = self._weights(x[:, 0])
+        raw = np.zeros((x.shape[0], len(self.outputs), self.n_bootstrap + 1))
+        for i, piece in enumerate(self._pieces):
+            rows = w[:, i] > 0.0
+            if np.any(rows):
+                raw[rows] += w[rows, i, None, None] * piece.predict_raw_all(x[rows])
+        return raw
+
+    def _interval_factors(self, x: FloatArray, y: FloatArray) -> dict[str, float]:
+        """Held-out calibration of the measure and ISS intervals (the surrogate's own error).
+
+        The pooled sensor x bootstrap percentiles see the sensor spread and how
+        the fit moves with the design, not the bias of the polynomial: where a
+        measure hardly varies over the sensor distribution (most side cases),
+        an error of a few per cent put every direct LPM outcome outside the
+        bare interval (measured: 83-93 % of the outcomes inside, by measure,
+        REPORT.md Table D). Split conformal with normalised residuals (Lei et al.
+        2018, J. Am. Stat. Assoc. 113:1094, section 5.2) on the family's
+        held-out LPM runs: r = |y_LPM - y_PCE| / s on the fitted scale (log for
+        the measures, points for ISS), s the bootstrap standard deviation at the
+        point floored at :data:`_FITTED_SD_FLOOR`; the factor is the
+        ``ceil((n + 1) 0.95) / n`` empirical quantile of r. At a request the
+        bound ``m = factor * s`` (s at the reading) is added in quadrature to
+        each side of the percentile interval about the point value ``y0``:
+        ``y0 - hypot(y0 - q_lo, m)``, ``y0 + hypot(q_hi - y0, m)``.
+
+        Parameters
+        ----------
+        x : ndarray, shape (n, 5)
+            Held-out inputs.
+        y : ndarray, shape (n, n_outputs)
+            Direct LPM outputs there (NaN where a run failed).
+
+        Returns
+        -------
+        dict
+            Output name (every output but ``p_iss15``) -> factor (>= 0).
+        """
+        ok = np.all(np.isfinite(y), axis=1) & np.all(np.isfinite(x), axis=1)
+        x, y = x[ok], y[ok]
+        n = x.shape[0]
+        if n < _MIN_CALIBRATION_POINTS:
+            return {}
+        raw = self._raw_all(x)
+        level = min(1.0, math.ceil((n + 1) * 0.95) / n)
+        out: dict[str, float] = {}
+        for k, name in enumerate(self.outputs):
+            if name == "p_iss15":
+                continue
+            truth = to_output_scale(name, y[:, k])
+            sd = _bootstrap_sd(raw[:, k, 1:], name)
+            # the served value is clipped to the physical range (>= 0, ISS <= 75)
+            pred = to_output_scale(name, from_output_scale(name, raw[:, k, 0]))
+            r = np.abs(truth - pred) / sd
+            out[name] = float(np.quantile(r, level, method="inverted_cdf"))
+        return out
 
     def _p_inflation(self, x: FloatArray, p_lpm: FloatArray) -> float:
         """Held-out calibration factor of the P(ISS >= 15) bootstrap interval.
@@ -564,7 +690,15 @@ class SurrogateFamily:
                 p_ci = (min(float(lo), float(w_lo)), max(float(hi), float(w_hi)))
                 continue
             point = float(from_output_scale(name, raw[k, 0, 0]))
-            lo, hi = (float(v) for v in from_output_scale(name, part[k, [k_lo, k_hi]]))
+            # the surrogate's own error (held-out calibrated 95% bound m at the
+            # reading) added in quadrature to each side of the sensor x bootstrap
+            # interval about the point value: independent errors; a measure the
+            # sensors do not move gets +-m, one they move a lot little more
+            m = self.interval_factors.get(name, 0.0) * float(_bootstrap_sd(raw[k, 1:, 0], name))
+            mid = float(raw[k, 0, 0])
+            g_lo = mid - math.hypot(mid - float(part[k, k_lo]), m)
+            g_hi = mid + math.hypot(float(part[k, k_hi]) - mid, m)
+            lo, hi = (float(v) for v in from_output_scale(name, np.array([g_lo, g_hi])))
             if name == "iss":
                 iss, iss_ci = point, (lo, hi)
             else:
