@@ -26,6 +26,7 @@ __all__ = [
     "Occupant",
     "Pulse",
     "Seat",
+    "SeatTrackSource",
     "Sex",
     "SummaryPulse",
     "summary_notification",
@@ -75,6 +76,22 @@ class AirbagState(StrEnum):
     DEPLOYED = "deployed"
     NOT_DEPLOYED = "not_deployed"
     ABSENT = "absent"
+
+
+class SeatTrackSource(StrEnum):
+    """What the notification knows of the seat's fore-aft position.
+
+    A seat position sensor gives a reading (``seat_track_mm``). Many cars have
+    only a seat track position switch, which tells whether the seat is in the
+    forward part of its travel (49 CFR 563 Table II "seat track position switch,
+    foremost, status"; a Hall-effect switch the airbag module reads). Without
+    either, the position is not sensed.
+    """
+
+    SENSOR = "sensor"
+    FOREMOST_SWITCH_ON = "foremost_switch_on"
+    FOREMOST_SWITCH_OFF = "foremost_switch_off"
+    NOT_SENSED = "not_sensed"
 
 
 class DriveSide(StrEnum):
@@ -174,6 +191,14 @@ class Occupant:
         Seat track position relative to mid track, mm, positive forward.
     posture_sd_deg, seat_track_sd_mm : float or None
         Sensor standard deviations; None for the service defaults.
+    posture_sensed : bool
+        False when no posture reading was given: the engine then takes the
+        neutral posture with the spread of the whole posture range
+        (:mod:`models.sensor_evidence`).
+    seat_track_source : SeatTrackSource
+        Where the seat position comes from; anything but ``SENSOR`` makes the
+        engine replace ``seat_track_mm`` and its SD by the range the evidence
+        allows (:mod:`models.sensor_evidence`).
     """
 
     seat: Seat
@@ -189,6 +214,8 @@ class Occupant:
     seat_track_mm: float = 0.0
     posture_sd_deg: float | None = None
     seat_track_sd_mm: float | None = None
+    posture_sensed: bool = True
+    seat_track_source: SeatTrackSource = SeatTrackSource.SENSOR
 
 
 @dataclass(frozen=True)

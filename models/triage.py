@@ -19,9 +19,11 @@ the same inputs and model versions give the same result, bit for bit (only
 from __future__ import annotations
 
 import dataclasses
+import hashlib
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from functools import lru_cache
 from pathlib import Path
 
 from models import ENGINE_VERSION
@@ -41,6 +43,7 @@ from models.risk_calibration import (
     corrected_probability,
     zero_load_probability,
 )
+from models.sensor_evidence import resolve_sensor_evidence
 from models.surrogate.evaluate import (
     EVALUATION_NAME,
     EVALUATION_VERSION,
@@ -57,6 +60,7 @@ __all__ = [
     "LPM_THRESHOLDS",
     "RECOMMENDATION_NO_TRAUMA_INDICATION",
     "RECOMMENDATION_TRAUMA_CENTER",
+    "TRIAGE_SOURCES",
     "EngineModels",
     "IssEstimate",
     "ModelInfo",
@@ -70,6 +74,7 @@ __all__ = [
     "load_surrogates",
     "simulate_notification",
     "triage",
+    "triage_code_sha256",
 ]
 
 #: Words for a positive decision. CDC 2011 / ACS 2021 field triage: "vehicle
@@ -105,6 +110,30 @@ DEFAULT_POSTURE_SD_DEG = 5.0 / 1.959964
 DEFAULT_SEAT_TRACK_SD_MM = 50.0 / 1.959964
 #: z of a two-sided 95% interval.
 _Z95 = 1.959964
+#: Sources (under models/) of the orchestration itself: how a notification becomes
+#: model inputs and how the answers become a decision. Their checksum is recorded
+#: with every case (``triage_code``), beside those of the models they call.
+TRIAGE_SOURCES = (
+    "triage.py",
+    "pulse.py",
+    "impact_mode.py",
+    "notification.py",
+    "sensor_evidence.py",
+    "lpm/domain.py",
+)
+
+
+@lru_cache(maxsize=1)
+def triage_code_sha256() -> str:
+    """SHA-256 over :data:`TRIAGE_SOURCES` (name and bytes, in a fixed order)."""
+    root = Path(__file__).resolve().parent
+    digest = hashlib.sha256()
+    for rel in TRIAGE_SOURCES:
+        digest.update(rel.encode() + b"\0")
+        digest.update((root / rel).read_bytes().replace(b"\r\n", b"\n") + b"\0")
+    return digest.hexdigest()
+
+
 #: Surrogate inputs that describe the crash (not the occupant sensors): a surrogate
 #: is not extrapolated in them.
 _CRASH_INPUTS = frozenset({"delta_v_kmh", "angle_deg", "duration_ms"})
@@ -228,6 +257,7 @@ class EngineModels:
             version=ENGINE_VERSION,
             sha256=lpm_code_sha256(),
         )
+        infos["triage_code"] = _triage_code_info()
         infos["risk_calibration"] = ModelInfo(
             name=CALIBRATION_NAME, version=CALIBRATION_VERSION, sha256=calibration_sha256()
         )
@@ -331,10 +361,18 @@ def _worst(decisions: list[TriageDecision]) -> TriageDecision:
     return max(decisions, key=lambda d: (d.iss15_plus, d.probability))
 
 
+def _triage_code_info() -> ModelInfo:
+    return ModelInfo(
+        name="notification-to-answer orchestration (pulse, impact mode, sensor evidence, decision)",
+        version=ENGINE_VERSION,
+        sha256=triage_code_sha256(),
+    )
+
+
 def _used_models(models: EngineModels, vehicle_model: str, used_lpm: bool) -> dict[str, ModelInfo]:
     infos = models.model_infos(vehicle_model)
     if not used_lpm:
-        return {"baseline": infos["baseline"]}
+        return {"baseline": infos["baseline"], "triage_code": infos["triage_code"]}
     return infos
 
 
@@ -425,6 +463,7 @@ def _lpm_occupant(
     assumptions: list[str],
 ) -> OccupantTriage | None:
     """Answer one in-coverage occupant with its occupant model; None to fall back."""
+    occupant = resolve_sensor_evidence(occupant, index, assumptions)
     lpm_occupant = _in_domain(occupant, index, assumptions)
     if impact.mode is ImpactMode.NEAR_SIDE and occupant.side_airbag is None:
         assumptions.append(

@@ -104,6 +104,14 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
             "version": "3.0.2.0",
             "sha256": "76f2b2126c7b339273c9b815466e783713169f699fc1ee065884a7a9a9bd280d",
         },
+        "surrogate_evaluation": {
+            "version": "2",
+            "sha256": "8e5ef0e9e0687ee1170b3941870241b3fa5472d6e4263cfc46f31e1da53d8116",
+        },
+        "triage_code": {
+            "version": "0.2.0",
+            "sha256": "66b16718b0b0994376aad906f6ff35444abe839f60a51d29f7f1bb8fa3f44554",
+        },
     },
     "timings_ms": {"pulse": 0.9, "occupants": 12.4, "engine_total": 13.3},
 }

@@ -266,18 +266,29 @@ class OccupantIn(WireModel):
     pretensioner_fired: bool | None = Field(
         default=None, description="Belt pretensioner fired (EDR Table II)."
     )
-    posture_lumbar_flexion_deg: float = Field(
-        default=engine.NEUTRAL_LUMBAR_FLEXION_DEG,
+    posture_lumbar_flexion_deg: float | None = Field(
+        default=None,
         ge=-20.0,
         le=60.0,
-        description="Lumbar flexion, deg: neutral 5.8, forward leaning up to 25. Values "
-        "outside the occupant models' range are clamped (reported as an assumption).",
+        description="Lumbar flexion from a posture sensor, deg: neutral 5.8, forward leaning up "
+        "to 25. Values outside the occupant models' range are clamped (reported as an "
+        "assumption). Omitted: not sensed; the neutral posture is used, with the spread of the "
+        "whole 0-25 deg range in the intervals (reported).",
     )
-    seat_track_mm: float = Field(
-        default=0.0,
+    seat_track_mm: float | None = Field(
+        default=None,
         ge=-300.0,
         le=300.0,
-        description="Seat track position relative to mid track, mm, positive forward.",
+        description="Seat track position from a seat position sensor, relative to mid track, "
+        "mm, positive forward. Omitted: see `seat_track_foremost`; with neither, the seat may be "
+        "anywhere on its track (mid track used, the whole track's spread in the intervals; "
+        "reported).",
+    )
+    seat_track_foremost: bool | None = Field(
+        default=None,
+        description="Seat track position switch, foremost (49 CFR 563 Table II): true when the "
+        "seat is in the forward part of its travel. Used when `seat_track_mm` is omitted: the "
+        "seat is then anywhere in that part of the track (reported).",
     )
     posture_sd_deg: float | None = Field(
         default=None, gt=0.0, le=30.0, description="Posture sensor standard deviation, deg."
@@ -305,6 +316,15 @@ class OccupantIn(WireModel):
         body = min(DUMMY_STATURE_MASS, key=distance)
         return body, f"body mapped from stature/mass to the nearer dummy: {body.value}"
 
+    def _seat_track_source(self) -> engine.SeatTrackSource:
+        if self.seat_track_mm is not None:
+            return engine.SeatTrackSource.SENSOR
+        if self.seat_track_foremost is None:
+            return engine.SeatTrackSource.NOT_SENSED
+        if self.seat_track_foremost:
+            return engine.SeatTrackSource.FOREMOST_SWITCH_ON
+        return engine.SeatTrackSource.FOREMOST_SWITCH_OFF
+
     def to_engine(self) -> tuple[engine.Occupant, str | None]:
         body, note = self.resolved_body()
         return (
@@ -318,10 +338,16 @@ class OccupantIn(WireModel):
                 sex=self.sex,
                 airbag_fire_time_ms=self.airbag_fire_time_ms,
                 pretensioner_fired=self.pretensioner_fired,
-                posture_lumbar_flexion_deg=self.posture_lumbar_flexion_deg,
-                seat_track_mm=self.seat_track_mm,
+                posture_lumbar_flexion_deg=(
+                    engine.NEUTRAL_LUMBAR_FLEXION_DEG
+                    if self.posture_lumbar_flexion_deg is None
+                    else self.posture_lumbar_flexion_deg
+                ),
+                seat_track_mm=0.0 if self.seat_track_mm is None else self.seat_track_mm,
                 posture_sd_deg=self.posture_sd_deg,
                 seat_track_sd_mm=self.seat_track_sd_mm,
+                posture_sensed=self.posture_lumbar_flexion_deg is not None,
+                seat_track_source=self._seat_track_source(),
             ),
             note,
         )
@@ -342,7 +368,8 @@ def _haversine_example(delta_v_kmh: float, duration_ms: float, n: int) -> list[f
 EXAMPLE_NOTIFICATIONS: dict[str, dict[str, Any]] = {
     "summary": {
         "summary": "Frontal crash, summary pulse",
-        "description": "56 km/h frontal, belted driver with deployed airbag.",
+        "description": "56 km/h frontal, belted driver with deployed airbag, posture and "
+        "seat position sensed.",
         "value": {
             "event_id": "tsp-7d1c2a90-0001",
             "occurred_at": "2026-11-23T08:15:30Z",
@@ -362,6 +389,8 @@ EXAMPLE_NOTIFICATIONS: dict[str, dict[str, Any]] = {
                     "frontal_airbag": "deployed",
                     "airbag_fire_time_ms": 15,
                     "pretensioner_fired": True,
+                    "posture_lumbar_flexion_deg": 5.8,
+                    "seat_track_mm": 0.0,
                 }
             ],
         },
@@ -369,8 +398,8 @@ EXAMPLE_NOTIFICATIONS: dict[str, dict[str, Any]] = {
     "delta_v": {
         "summary": "Near-side crash, EDR delta-V record",
         "description": "49 CFR 563 record at 10 ms: a left-side impact on a left-hand-drive "
-        "car; the driver is on the near side (her side and curtain airbags deployed), the "
-        "passenger on the far side.",
+        "car; the driver is on the near side (her side and curtain airbags deployed; the EDR "
+        "seat track switch says her seat is forward), the passenger on the far side.",
         "value": {
             "event_id": "tsp-7d1c2a90-0002",
             "occurred_at": "2026-11-23T09:02:11+01:00",
@@ -395,6 +424,7 @@ EXAMPLE_NOTIFICATIONS: dict[str, dict[str, Any]] = {
                     "belted": True,
                     "frontal_airbag": "not_deployed",
                     "side_airbag": "deployed",
+                    "seat_track_foremost": True,
                 },
                 {
                     "seat": "front_passenger",

@@ -104,7 +104,7 @@ def test_out_of_coverage_occupants_get_the_baseline_and_a_note(models: EngineMod
     assert not occ.impact.in_lpm_coverage
     assert occ.triage == occ.baseline
     assert any("outside every occupant model" in a for a in result.assumptions)
-    assert set(result.models) == {"baseline"}
+    assert set(result.models) == {"baseline", "triage_code"}
 
 
 def test_severity_rises_with_delta_v(models: EngineModels) -> None:
@@ -261,3 +261,29 @@ def test_second_row_impact_modes(seat: Seat, pdof: float, mode: ImpactMode) -> N
     impact = classify_impact(pdof, seat, DriveSide.LEFT)
     assert impact.mode is mode
     assert not impact.in_lpm_coverage
+
+
+def test_every_case_records_the_code_that_turned_it_into_an_answer(models: EngineModels) -> None:
+    """The orchestration's own checksum (over its sources, as stored) and the
+    surrogate evaluation's, beside the models they call; a baseline-only answer
+    records the orchestration too."""
+    import hashlib
+    from pathlib import Path
+
+    import models as engine_package
+    from models.surrogate.evaluate import EVALUATION_VERSION, evaluation_sha256
+    from models.triage import TRIAGE_SOURCES, triage_code_sha256
+
+    root = Path(engine_package.__file__).resolve().parent
+    digest = hashlib.sha256()
+    for rel in TRIAGE_SOURCES:
+        digest.update(rel.encode() + b"\0")
+        digest.update((root / rel).read_bytes().replace(b"\r\n", b"\n") + b"\0")
+    assert triage_code_sha256() == digest.hexdigest()
+    lpm = triage(_notification(), models)
+    assert lpm.models["triage_code"].sha256 == digest.hexdigest()
+    assert lpm.models["surrogate_evaluation"].version == EVALUATION_VERSION
+    assert lpm.models["surrogate_evaluation"].sha256 == evaluation_sha256()
+    rear_seat = dataclasses.replace(_notification().occupants[0], seat=Seat.REAR_LEFT)
+    baseline_only = triage(_notification(occupants=(rear_seat,)), models)
+    assert set(baseline_only.models) == {"baseline", "triage_code"}

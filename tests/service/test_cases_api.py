@@ -166,3 +166,40 @@ def test_a_notification_with_second_row_occupants_is_triaged_not_refused(
     result = response.json()
     assert [o["method"] for o in result["occupants"]] == ["lpm", "baseline", "baseline"]
     assert sum("the occupant models are of the front row" in a for a in result["assumptions"]) == 2
+
+
+def test_posture_and_seat_evidence_reach_the_answer(api: ApiClient) -> None:
+    """Without posture or seat readings the answer says what it assumed; the EDR
+    seat track switch narrows the seat to the forward part of the track; a reading
+    is used as given. The point answer stays the direct run at the nominal inputs."""
+    answers = {}
+    for label, extra in {
+        "none": {},
+        "switch": {"seat_track_foremost": True},
+        "reading": {"posture_lumbar_flexion_deg": 5.8, "seat_track_mm": 0.0},
+    }.items():
+        body = summary(56.0, 0.0, event_id=f"evidence-{label}")
+        occ = body["occupants"][0]
+        for key in ("posture_lumbar_flexion_deg", "seat_track_mm", "seat_track_foremost"):
+            occ.pop(key, None)
+        occ.update(extra)
+        response = api.client.post("/v1/cases", json=body, headers=api.headers("submitter"))
+        assert response.status_code == 201, response.text
+        answers[label] = response.json()
+    notes = {k: " ".join(v["assumptions"]) for k, v in answers.items()}
+    assert "posture not sensed" in notes["none"]
+    assert "seat position not sensed" in notes["none"]
+    assert "seat track switch says foremost" in notes["switch"]
+    assert "not sensed" not in notes["reading"]
+    p = {k: v["occupants"][0]["triage"]["probability"] for k, v in answers.items()}
+    assert p["none"] == p["reading"]
+    assert p["switch"] != p["reading"]  # the direct run is in the forward part of the track
+
+
+def test_a_malformed_seat_switch_is_refused_naming_the_field(api: ApiClient) -> None:
+    body = summary()
+    body["occupants"][0]["seat_track_foremost"] = "sometimes"
+    problem = assert_problem(
+        api.client.post("/v1/cases", json=body, headers=api.headers("submitter")), 422
+    )
+    assert "seat_track_foremost" in str(problem)
