@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import json
 import logging
 import os
 from collections.abc import AsyncIterator
@@ -18,7 +19,7 @@ from service.context import ServiceContext, engine_models_for
 from service.db import migrate
 from service.db.session import make_engine, make_sessionmaker
 from service.metrics import Metrics, metrics_middleware
-from service.problems import install_problem_handlers, problem_response
+from service.problems import PROBLEM_MEDIA_TYPE, install_problem_handlers, problem_response
 from service.settings import Settings, get_settings
 
 __all__ = ["create_app"]
@@ -77,6 +78,37 @@ def _operation_id(route: APIRoute) -> str:
     return f"{tag}-{route.name}"
 
 
+def _document_validation_problems(app: FastAPI) -> None:
+    """Document every 422 as the problem+json it is (``service.problems``).
+
+    FastAPI adds its own ``application/json`` HTTPValidationError body to each
+    operation that validates input; the service answers validation errors with
+    RFC 9457 problems only, so the generated document is corrected once.
+    """
+    generate = app.openapi
+
+    def openapi() -> dict[str, Any]:
+        if app.openapi_schema is not None:
+            return app.openapi_schema
+        doc = generate()
+        for ops in doc.get("paths", {}).values():
+            for op in ops.values():
+                response = op.get("responses", {}).get("422")
+                if response is not None:
+                    response["description"] = "Problem: a field refused, named with the reason"
+                    response["content"] = {
+                        PROBLEM_MEDIA_TYPE: {"schema": {"$ref": "#/components/schemas/Problem"}}
+                    }
+        schemas = doc.get("components", {}).get("schemas", {})
+        if "HTTPValidationError" not in json.dumps(doc.get("paths", {})):
+            schemas.pop("HTTPValidationError", None)
+            schemas.pop("ValidationError", None)
+        app.openapi_schema = doc
+        return doc
+
+    app.openapi = openapi  # type: ignore[method-assign]
+
+
 def create_app(settings: Settings | None = None) -> FastAPI:
     """Build the FastAPI application.
 
@@ -131,6 +163,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         generate_unique_id_function=_operation_id,
     )
     install_problem_handlers(app)
+    _document_validation_problems(app)
     app.middleware("http")(metrics_middleware(metrics))
     app.add_middleware(BodySizeLimit, max_bytes=settings.max_body_bytes)
     app.include_router(health.router)

@@ -77,3 +77,20 @@ def test_bad_cursor_and_bad_filter_are_problems(api: ApiClient) -> None:
     assert_problem(api.client.get("/v1/cases", params={"cursor": "garbage!"}, headers=h), 422)
     assert_problem(api.client.get("/v1/cases", params={"impact_mode": "sideways"}, headers=h), 422)
     assert_problem(api.client.get("/v1/cases", params={"limit": 0}, headers=h), 422)
+
+
+@pytest.mark.parametrize(
+    "value", ["0.5", "1732950000", "2026-11-23T08:15:30", "yesterday", "2026-13-40T00:00:00Z"]
+)
+def test_time_filters_take_rfc3339_with_an_offset_only(api: ApiClient, value: str) -> None:
+    """A bare number is not a time here (pydantic would read it as a Unix time and list
+    every case), nor is a time without its offset: 422 naming the filter."""
+    r = api.client.get("/v1/cases", params={"received_from": value}, headers=api.headers("auditor"))
+    problem = assert_problem(r, 422)
+    assert [e["field"] for e in problem["errors"]] == ["received_from"]
+
+
+def test_a_wrong_method_names_every_method_of_the_path(api: ApiClient) -> None:
+    r = api.client.request("DELETE", "/v1/cases", headers=api.headers("admin"))
+    assert_problem(r, 405)
+    assert r.headers["Allow"] == "GET, POST"
