@@ -709,6 +709,8 @@ def simulate_notification(
         impact = classify_impact(pulse.pdof_deg, occupant.seat, notification.drive_side)
         result = None
         if impact.in_lpm_coverage:
+            # the same nominal posture and seat track as the triage's direct run
+            occupant = resolve_sensor_evidence(occupant, i, assumptions)
             result = _run(pulse, impact, _in_domain(occupant, i, assumptions), params)
         out.append(OccupantSimulation(i, occupant, impact, result))
     return pulse, out, assumptions

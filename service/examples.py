@@ -110,7 +110,7 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         },
         "triage_code": {
             "version": "0.2.0",
-            "sha256": "66b16718b0b0994376aad906f6ff35444abe839f60a51d29f7f1bb8fa3f44554",
+            "sha256": "7207b1098d9494b8a9ea1c1c707ef2a5515023c730d18e258510781ee7cd1593",
         },
     },
     "timings_ms": {"pulse": 0.9, "occupants": 12.4, "engine_total": 13.3},

@@ -154,3 +154,19 @@ def test_a_foremost_switch_puts_the_seat_in_the_forward_part_of_the_track(
     assert f"{lo:g} to {hi:g} mm" in note
     assert "SD 23 mm" in note
     assert not any("seat track" in x for x in by_reading.assumptions)
+
+
+def test_simulate_runs_the_same_nominal_occupant_as_triage(models: EngineModels) -> None:
+    """``aacn-triage simulate`` shows the run the triage decided on: with a foremost
+    switch, the seat at the centre of the forward range, not mid track."""
+    from models.triage import simulate_notification
+
+    switch = dataclasses.replace(DRIVER, seat_track_source=SeatTrackSource.FOREMOST_SWITCH_ON)
+    notification = summary_notification((switch,), 56.0, 0.0)
+    _, sims, notes = simulate_notification(notification, models)
+    answer = triage(notification, models).occupants[0]
+    assert sims[0].result is not None
+    assert sims[0].occupant.seat_track_mm == pytest.approx(80.0)
+    assert answer.measures is not None
+    assert sims[0].result.measures.hic15 == answer.measures["hic15"]
+    assert any("seat track switch says foremost" in n for n in notes)
