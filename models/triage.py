@@ -61,6 +61,7 @@ __all__ = [
     "RECOMMENDATION_NO_TRAUMA_INDICATION",
     "RECOMMENDATION_TRAUMA_CENTER",
     "TRIAGE_SOURCES",
+    "SensorInputs",
     "EngineModels",
     "IssEstimate",
     "ModelInfo",
@@ -192,6 +193,28 @@ class OccupantTriage:
     #: (`models.risk_calibration`)
     probability_uncorrected: float | None = None
     probability_zero_load: float | None = None
+    #: occupant models only: the posture and seat track used, with their SDs
+    sensor_inputs: SensorInputs | None = None
+
+
+@dataclass(frozen=True)
+class SensorInputs:
+    """The occupant inputs an occupant-model answer was computed at.
+
+    Attributes
+    ----------
+    posture_deg, seat_track_mm : float
+        Lumbar flexion (deg) and seat track (mm forward of mid track) of the
+        direct run, after the sensor evidence was resolved and the values
+        clamped to the models' domain.
+    posture_sd_deg, seat_track_sd_mm : float
+        Standard deviations propagated into the intervals (deg, mm).
+    """
+
+    posture_deg: float
+    posture_sd_deg: float
+    seat_track_mm: float
+    seat_track_sd_mm: float
 
 
 @dataclass(frozen=True)
@@ -585,6 +608,12 @@ def _lpm_occupant(
         point_outside_interval=outside,
         probability_uncorrected=p,
         probability_zero_load=p0,
+        sensor_inputs=SensorInputs(
+            posture_deg=lpm_occupant.posture_lumbar_flexion_deg,
+            posture_sd_deg=posture_sd,
+            seat_track_mm=lpm_occupant.seat_track_mm,
+            seat_track_sd_mm=track_sd,
+        ),
     )
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 from datetime import datetime
 
 from models.triage import OccupantTriage, TriageDecision, TriageResult
@@ -12,6 +13,7 @@ from service.schemas import (
     ModelVersionOut,
     OccupantOut,
     PulseOut,
+    SensorInputsOut,
     TriageOut,
 )
 
@@ -44,6 +46,11 @@ def _occupant_out(o: OccupantTriage) -> OccupantOut:
         point_outside_interval=o.point_outside_interval,
         probability_uncorrected=o.probability_uncorrected,
         probability_zero_load=o.probability_zero_load,
+        sensor_inputs=(
+            SensorInputsOut(**dataclasses.asdict(o.sensor_inputs))
+            if o.sensor_inputs is not None
+            else None
+        ),
         triage=_triage_out(o.triage),
         baseline=_triage_out(o.baseline),
     )

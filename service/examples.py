@@ -54,6 +54,12 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
             "point_outside_interval": False,
             "probability_uncorrected": 0.08184,
             "probability_zero_load": 0.04633,
+            "sensor_inputs": {
+                "posture_deg": 5.8,
+                "posture_sd_deg": 2.551,
+                "seat_track_mm": 0.0,
+                "seat_track_sd_mm": 25.51,
+            },
             "triage": {
                 "iss15_plus": False,
                 "probability": 0.03724,
@@ -110,7 +116,7 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         },
         "triage_code": {
             "version": "0.2.0",
-            "sha256": "7207b1098d9494b8a9ea1c1c707ef2a5515023c730d18e258510781ee7cd1593",
+            "sha256": "b05f65a529fd6716e37de8e1266f799181b07d8be0573e9ec493877bbb5c6885",
         },
     },
     "timings_ms": {"pulse": 0.9, "occupants": 12.4, "engine_total": 13.3},

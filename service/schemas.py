@@ -582,6 +582,20 @@ class PulseOut(OutModel):
     haversine: HaversineOut
 
 
+class SensorInputsOut(OutModel):
+    """The posture and seat track an occupant-model answer was computed at."""
+
+    posture_deg: float = Field(
+        description="Lumbar flexion of the direct run, deg (after the evidence was resolved "
+        "and the value clamped to the models' range)."
+    )
+    posture_sd_deg: float = Field(description="Posture SD propagated into the intervals, deg.")
+    seat_track_mm: float = Field(
+        description="Seat track of the direct run, mm forward of mid track (resolved, clamped)."
+    )
+    seat_track_sd_mm: float = Field(description="Seat track SD propagated into the intervals, mm.")
+
+
 class OccupantOut(OutModel):
     """The triage of one occupant."""
 
@@ -630,6 +644,12 @@ class OccupantOut(OutModel):
         le=1,
         description="Occupant models only: the same occupant's P(ISS >= 15) from the risk "
         "curves with every measure at zero (about 0.054: the curves' floor, not crash risk).",
+    )
+    sensor_inputs: SensorInputsOut | None = Field(
+        default=None,
+        description="Occupant models only: the posture and seat track the answer was computed "
+        "at, with the SDs its intervals propagate (a reading and its sensor SD, or the range "
+        "the evidence allows; see `assumptions`).",
     )
     triage: TriageOut
     baseline: TriageOut = Field(

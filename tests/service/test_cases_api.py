@@ -194,6 +194,23 @@ def test_posture_and_seat_evidence_reach_the_answer(api: ApiClient) -> None:
     p = {k: v["occupants"][0]["triage"]["probability"] for k, v in answers.items()}
     assert p["none"] == p["reading"]
     assert p["switch"] != p["reading"]  # the direct run is in the forward part of the track
+    used = {k: v["occupants"][0]["sensor_inputs"] for k, v in answers.items()}
+    assert used["reading"] == pytest.approx(
+        {
+            "posture_deg": 5.8,
+            "posture_sd_deg": 2.551,
+            "seat_track_mm": 0.0,
+            "seat_track_sd_mm": 25.51,
+        },
+        abs=1e-3,
+    )
+    assert used["none"]["posture_sd_deg"] == pytest.approx(25.0 / 12**0.5)
+    assert used["none"]["seat_track_sd_mm"] == pytest.approx(240.0 / 12**0.5)
+    assert used["switch"]["seat_track_mm"] == pytest.approx(80.0)
+    assert used["switch"]["seat_track_sd_mm"] == pytest.approx(80.0 / 12**0.5)
+    case_id = answers["switch"]["case_id"]
+    stored = api.client.get(f"/v1/cases/{case_id}", headers=api.headers("auditor")).json()
+    assert stored["result"]["occupants"][0]["sensor_inputs"] == used["switch"]
 
 
 def test_a_malformed_seat_switch_is_refused_naming_the_field(api: ApiClient) -> None:
