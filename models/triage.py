@@ -173,6 +173,26 @@ class IssEstimate:
 
 
 @dataclass(frozen=True)
+class SensorInputs:
+    """The occupant inputs an occupant-model answer was computed at.
+
+    Attributes
+    ----------
+    posture_deg, seat_track_mm : float
+        Lumbar flexion (deg) and seat track (mm forward of mid track) of the
+        direct run, after the sensor evidence was resolved and the values
+        clamped to the models' domain.
+    posture_sd_deg, seat_track_sd_mm : float
+        Standard deviations propagated into the intervals (deg, mm).
+    """
+
+    posture_deg: float
+    posture_sd_deg: float
+    seat_track_mm: float
+    seat_track_sd_mm: float
+
+
+@dataclass(frozen=True)
 class OccupantTriage:
     """The triage of one occupant."""
 
@@ -195,26 +215,6 @@ class OccupantTriage:
     probability_zero_load: float | None = None
     #: occupant models only: the posture and seat track used, with their SDs
     sensor_inputs: SensorInputs | None = None
-
-
-@dataclass(frozen=True)
-class SensorInputs:
-    """The occupant inputs an occupant-model answer was computed at.
-
-    Attributes
-    ----------
-    posture_deg, seat_track_mm : float
-        Lumbar flexion (deg) and seat track (mm forward of mid track) of the
-        direct run, after the sensor evidence was resolved and the values
-        clamped to the models' domain.
-    posture_sd_deg, seat_track_sd_mm : float
-        Standard deviations propagated into the intervals (deg, mm).
-    """
-
-    posture_deg: float
-    posture_sd_deg: float
-    seat_track_mm: float
-    seat_track_sd_mm: float
 
 
 @dataclass(frozen=True)

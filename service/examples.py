@@ -112,11 +112,11 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         },
         "surrogate_evaluation": {
             "version": "2",
-            "sha256": "8e5ef0e9e0687ee1170b3941870241b3fa5472d6e4263cfc46f31e1da53d8116",
+            "sha256": "385c573fdc18eb502f77e99ab4f5b7fe99b4546d5ed3263665c79ba36c4aaa32",
         },
         "triage_code": {
             "version": "0.2.0",
-            "sha256": "b05f65a529fd6716e37de8e1266f799181b07d8be0573e9ec493877bbb5c6885",
+            "sha256": "7fc1dedc0c5364d9a467f239cb6df9c4d8b40dbb8cbc5fd23324a8a662db2516",
         },
     },
     "timings_ms": {"pulse": 0.9, "occupants": 12.4, "engine_total": 13.3},

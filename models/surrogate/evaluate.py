@@ -452,7 +452,8 @@ class SurrogateFamily:
         ``ceil((n + 1) 0.95) / n`` empirical quantile of r. At a request the
         bound ``m = factor * s`` (s at the reading) is added in quadrature to
         each side of the percentile interval about the point value ``y0``:
-        ``y0 - hypot(y0 - q_lo, m)``, ``y0 + hypot(q_hi - y0, m)``.
+        ``min(q_lo, y0 - hypot(max(y0 - q_lo, 0), m))`` and the mirror image
+        above (the interval always holds the bare percentiles and ``y0``).
 
         Parameters
         ----------
@@ -695,9 +696,9 @@ class SurrogateFamily:
             # interval about the point value: independent errors; a measure the
             # sensors do not move gets +-m, one they move a lot little more
             m = self.interval_factors.get(name, 0.0) * float(_bootstrap_sd(raw[k, 1:, 0], name))
-            mid = float(raw[k, 0, 0])
-            g_lo = mid - math.hypot(mid - float(part[k, k_lo]), m)
-            g_hi = mid + math.hypot(float(part[k, k_hi]) - mid, m)
+            mid, q_lo, q_hi = float(raw[k, 0, 0]), float(part[k, k_lo]), float(part[k, k_hi])
+            g_lo = min(q_lo, mid - math.hypot(max(mid - q_lo, 0.0), m))
+            g_hi = max(q_hi, mid + math.hypot(max(q_hi - mid, 0.0), m))
             lo, hi = (float(v) for v in from_output_scale(name, np.array([g_lo, g_hi])))
             if name == "iss":
                 iss, iss_ci = point, (lo, hi)
