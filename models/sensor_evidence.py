@@ -42,7 +42,7 @@ FOREMOST_SWITCH_POINT_MM: Final[float] = 40.0
 
 
 def uniform_sd(low: float, high: float) -> float:
-    """Standard deviation of a uniform distribution on [low, high]."""
+    """Standard deviation of a uniform distribution on [low, high] (in their unit)."""
     return (high - low) / math.sqrt(12.0)
 
 
@@ -96,10 +96,14 @@ def resolve_sensor_evidence(occupant: Occupant, index: int, assumptions: list[st
             posture_sd_deg=sd,
             posture_sensed=True,
         )
+        spread = (
+            "as given"
+            if occupant.posture_sd_deg
+            else f"anywhere in {POSTURE_RANGE_DEG[0]:g}-{POSTURE_RANGE_DEG[1]:g} deg"
+        )
         assumptions.append(
             f"occupants[{index}]: posture not sensed: neutral lumbar flexion "
-            f"{NEUTRAL_LUMBAR_FLEXION_DEG:g} deg with SD {sd:.1f} deg in the intervals "
-            f"(anywhere in {POSTURE_RANGE_DEG[0]:g}-{POSTURE_RANGE_DEG[1]:g} deg)"
+            f"{NEUTRAL_LUMBAR_FLEXION_DEG:g} deg with SD {sd:.1f} deg in the intervals ({spread})"
         )
     if occupant.seat_track_source is not SeatTrackSource.SENSOR:
         lo, hi = seat_track_range_mm(occupant.seat_track_source)
@@ -119,5 +123,6 @@ def resolve_sensor_evidence(occupant: Occupant, index: int, assumptions: list[st
         assumptions.append(
             f"occupants[{index}]: {why}: seat track anywhere in {lo:g} to {hi:g} mm "
             f"(mid track 0, + forward): {centre:g} mm with SD {sd:.0f} mm in the intervals"
+            + (" (SD as given)" if occupant.seat_track_sd_mm else "")
         )
     return out

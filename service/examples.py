@@ -116,7 +116,7 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         },
         "triage_code": {
             "version": "0.2.0",
-            "sha256": "7fc1dedc0c5364d9a467f239cb6df9c4d8b40dbb8cbc5fd23324a8a662db2516",
+            "sha256": "6881cbaff7a98326738529fd9ab0d88c46d2abd4443e4a939dbee5ab19a0c3ca",
         },
     },
     "timings_ms": {"pulse": 0.9, "occupants": 12.4, "engine_total": 13.3},
