@@ -100,7 +100,7 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         },
         "lpm_code": {
             "version": "0.2.0",
-            "sha256": "f18c89fb29645522e145e507dd8b49737a19860acca2d1f5ad1f40d5d697ed66",
+            "sha256": "b6f01dc880987f64a5260680100c6d0107391dc0dacabb1963f8beee6bc54bf0",
         },
         "risk_calibration": {
             "version": "1",
@@ -108,7 +108,7 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         },
         "surrogates": {
             "version": "3.0.2.0",
-            "sha256": "76f2b2126c7b339273c9b815466e783713169f699fc1ee065884a7a9a9bd280d",
+            "sha256": "925b1ac0bf227b69a7d7eed834a06d51dd3422834f196c252d00c7985939b130",
         },
         "surrogate_evaluation": {
             "version": "2",

@@ -138,7 +138,8 @@ class Model:
     ct : ndarray, shape (nc, 20)
     bt : ndarray, shape (nb, 20)
     bag : ndarray, shape (8,)
-    y0 : ndarray, shape (12 + 2 nb + nc,)
+    y0 : ndarray, shape (12 + 2 nb + 2 nc,)
+        Initial state; every contact's arming state 1 (kernel.ARM_TIME_S).
     contact_names, belt_names : tuple of str
     """
 
@@ -1036,8 +1037,9 @@ def _finish(
         )
     ct = np.array(rows, dtype=np.float64).reshape(-1, K.NCF)
     bt = np.array(belts, dtype=np.float64).reshape(-1, K.NBF)
-    y0 = np.zeros(2 * K.NQ + 2 * bt.shape[0] + ct.shape[0])
+    y0 = np.zeros(2 * K.NQ + 2 * bt.shape[0] + 2 * ct.shape[0])
     y0[: K.NQ] = q0
+    y0[2 * K.NQ + 2 * bt.shape[0] + ct.shape[0] :] = 1.0  # every contact armed at rest
     return Model(
         plane,
         np.ascontiguousarray(ll),
