@@ -19,7 +19,6 @@ the same inputs and model versions give the same result, bit for bit (only
 from __future__ import annotations
 
 import dataclasses
-import hashlib
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field
@@ -31,7 +30,7 @@ from models.baseline.logistic import BaselineFeatures, BaselineModel, load_defau
 from models.impact_mode import ImpactClassification, ImpactMode, classify_impact
 from models.injury.assessment import InjuryMeasures
 from models.lpm.domain import POSTURE_RANGE_DEG, SEAT_TRACK_RANGE_MM, clamp
-from models.lpm.fingerprint import lpm_code_sha256
+from models.lpm.fingerprint import lpm_code_sha256, sources_sha256
 from models.lpm.params import ParameterSet, available_parameter_sets, load_parameter_set
 from models.lpm.simulate import LpmResult, simulate, warm_up
 from models.notification import AirbagState, Body, CrashNotification, Occupant, Seat
@@ -126,13 +125,8 @@ TRIAGE_SOURCES = (
 
 @lru_cache(maxsize=1)
 def triage_code_sha256() -> str:
-    """SHA-256 over :data:`TRIAGE_SOURCES` (name and bytes, in a fixed order)."""
-    root = Path(__file__).resolve().parent
-    digest = hashlib.sha256()
-    for rel in TRIAGE_SOURCES:
-        digest.update(rel.encode() + b"\0")
-        digest.update((root / rel).read_bytes().replace(b"\r\n", b"\n") + b"\0")
-    return digest.hexdigest()
+    """SHA-256 over :data:`TRIAGE_SOURCES` (as :func:`models.lpm.fingerprint.sources_sha256`)."""
+    return sources_sha256(TRIAGE_SOURCES)
 
 
 #: Surrogate inputs that describe the crash (not the occupant sensors): a surrogate

@@ -112,11 +112,11 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         },
         "surrogate_evaluation": {
             "version": "2",
-            "sha256": "385c573fdc18eb502f77e99ab4f5b7fe99b4546d5ed3263665c79ba36c4aaa32",
+            "sha256": "d8d016ac765edad3b58e8069ea356aa6858a07a92b6c2504270255f99fda8831",
         },
         "triage_code": {
             "version": "0.2.0",
-            "sha256": "6881cbaff7a98326738529fd9ab0d88c46d2abd4443e4a939dbee5ab19a0c3ca",
+            "sha256": "1fe10dede9a0dbd5df3eabfb33f87ef4b67cb87aa6b468fa441c782427605508",
         },
     },
     "timings_ms": {"pulse": 0.9, "occupants": 12.4, "engine_total": 13.3},

@@ -295,12 +295,6 @@ class _Piece:
         out = np.asarray(psi @ self._coef_t, dtype=np.float64)
         return out.reshape(x.shape[0], len(self.outputs), self._nb1)
 
-    def predict_raw_replicates(self, x: FloatArray, output: int) -> FloatArray:
-        """Fitted-scale values of one output, point PCE and every replicate, shape (n, B + 1)."""
-        psi = design_matrix(to_unit(x, self._ranges), self._recs, self._terms)
-        cols = slice(output * self._nb1, (output + 1) * self._nb1)
-        return np.asarray(psi @ self._coef_t[:, cols], dtype=np.float64)
-
     @property
     def delta_v_design(self) -> tuple[float, float]:
         """Delta-V design range of the piece, km/h."""
@@ -401,18 +395,15 @@ class SurrogateFamily:
         sa(self, "_edges", edges)
         sa(self, "_pieces", pieces)
         inflation = 1.0
-        if "p_iss15" in outputs and "heldout_x" in arrays and "heldout_y" in arrays:
-            inflation = self._p_inflation(
-                np.asarray(arrays["heldout_x"], dtype=np.float64),
-                np.asarray(arrays["heldout_y"], dtype=np.float64)[:, outputs.index("p_iss15")],
-            )
-        sa(self, "p_interval_inflation", inflation)
         factors: dict[str, float] = {}
         if "heldout_x" in arrays and "heldout_y" in arrays:
-            factors = self._interval_factors(
-                np.asarray(arrays["heldout_x"], dtype=np.float64),
-                np.asarray(arrays["heldout_y"], dtype=np.float64),
-            )
+            hx = np.asarray(arrays["heldout_x"], dtype=np.float64)
+            hy = np.asarray(arrays["heldout_y"], dtype=np.float64)
+            raw = self._raw_all(hx)  # once for both calibrations
+            if "p_iss15" in outputs:
+                inflation = self._p_inflation(hx, hy[:, outputs.index("p_iss15")], raw=raw)
+            factors = self._interval_factors(hx, hy, raw=raw)
+        sa(self, "p_interval_inflation", inflation)
         sa(self, "interval_factors", MappingProxyType(factors))
         return self
 
@@ -436,7 +427,9 @@ class SurrogateFamily:
                 raw[rows] += w[rows, i, None, None] * piece.predict_raw_all(x[rows])
         return raw
 
-    def _interval_factors(self, x: FloatArray, y: FloatArray) -> dict[str, float]:
+    def _interval_factors(
+        self, x: FloatArray, y: FloatArray, raw: FloatArray | None = None
+    ) -> dict[str, float]:
         """Held-out calibration of the measure and ISS intervals (the surrogate's own error).
 
         The pooled sensor x bootstrap percentiles see the sensor spread and how
@@ -461,6 +454,8 @@ class SurrogateFamily:
             Held-out inputs.
         y : ndarray, shape (n, n_outputs)
             Direct LPM outputs there (NaN where a run failed).
+        raw : ndarray, shape (n, n_outputs, B + 1), optional
+            :meth:`_raw_all` at `x`, when already computed.
 
         Returns
         -------
@@ -468,11 +463,11 @@ class SurrogateFamily:
             Output name (every output but ``p_iss15``) -> factor (>= 0).
         """
         ok = np.all(np.isfinite(y), axis=1) & np.all(np.isfinite(x), axis=1)
-        x, y = x[ok], y[ok]
-        n = x.shape[0]
-        if n < _MIN_CALIBRATION_POINTS:
+        if int(ok.sum()) < _MIN_CALIBRATION_POINTS:
             return {}
-        raw = self._raw_all(x)
+        raw = (self._raw_all(x) if raw is None else raw)[ok]
+        y = y[ok]
+        n = y.shape[0]
         level = min(1.0, math.ceil((n + 1) * 0.95) / n)
         out: dict[str, float] = {}
         for k, name in enumerate(self.outputs):
@@ -486,7 +481,9 @@ class SurrogateFamily:
             out[name] = float(np.quantile(r, level, method="inverted_cdf"))
         return out
 
-    def _p_inflation(self, x: FloatArray, p_lpm: FloatArray) -> float:
+    def _p_inflation(
+        self, x: FloatArray, p_lpm: FloatArray, raw: FloatArray | None = None
+    ) -> float:
         """Held-out calibration factor of the P(ISS >= 15) bootstrap interval.
 
         The bootstrap replicates measure how much the fit moves with the design;
@@ -505,24 +502,21 @@ class SurrogateFamily:
             Held-out inputs.
         p_lpm : ndarray, shape (n,)
             P(ISS >= 15) of the direct LPM runs there (NaN where a run failed).
+        raw : ndarray, shape (n, n_outputs, B + 1), optional
+            :meth:`_raw_all` at `x`, when already computed.
 
         Returns
         -------
         float
         """
         ok = np.isfinite(p_lpm) & np.all(np.isfinite(x), axis=1)
-        x, p_lpm = x[ok], p_lpm[ok]
-        if x.shape[0] < _MIN_CALIBRATION_POINTS:
+        if int(ok.sum()) < _MIN_CALIBRATION_POINTS:
             return 1.0
         k = self.outputs.index("p_iss15")
-        w = self._weights(x[:, 0])
-        raw = np.zeros((x.shape[0], self.n_bootstrap + 1))
-        for i, piece in enumerate(self._pieces):
-            rows = w[:, i] > 0.0
-            if np.any(rows):
-                raw[rows] += w[rows, i, None] * piece.predict_raw_replicates(x[rows], k)
+        raw_p = (self._raw_all(x) if raw is None else raw)[ok, k]
+        p_lpm = p_lpm[ok]
         lim = float(to_output_scale("p_iss15", 1.0))
-        clipped = np.clip(raw, -lim, lim)
+        clipped = np.clip(raw_p, -lim, lim)
         truth = to_output_scale("p_iss15", p_lpm)
         sd = np.maximum(np.std(clipped[:, 1:], axis=1, ddof=1), _P_SD_FLOOR)
         r = np.abs(truth - clipped[:, 0]) / sd
