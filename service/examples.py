@@ -96,11 +96,11 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         },
         "lpm_parameters:compact_sedan": {
             "version": "compact_sedan",
-            "sha256": "956c258fe725bd733a312f719623dc94069c9262d36b9358349d0992456d1aa1",
+            "sha256": "f94d2833d56ac157b05df841485d9f364f6bf7b659444c5daa526397b8566a53",
         },
         "lpm_code": {
             "version": "0.2.0",
-            "sha256": "b6f01dc880987f64a5260680100c6d0107391dc0dacabb1963f8beee6bc54bf0",
+            "sha256": "0380c7851ba9a1ed2287cee3d7c3e37f41a1d2b2921ab52ad768806c8746f318",
         },
         "risk_calibration": {
             "version": "1",
@@ -108,7 +108,7 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         },
         "surrogates": {
             "version": "3.0.2.0",
-            "sha256": "925b1ac0bf227b69a7d7eed834a06d51dd3422834f196c252d00c7985939b130",
+            "sha256": "529c60339d8ee6cbdb659df294e719116e6d9d4d3cf6db7f55bb764be35c210d",
         },
         "surrogate_evaluation": {
             "version": "2",

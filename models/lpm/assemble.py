@@ -91,6 +91,7 @@ class ContactSpec:
     bottom_cap: float = 0.0
     crush_viscosity: float = 200.0
     hysteresis: float = 0.0
+    crush_limit: float = 0.0
 
     def row(self, side: float) -> list[float]:
         """The contact as a row of the kernel's contact table.
@@ -135,7 +136,7 @@ class Model:
     jt : ndarray, shape (4, 7)
     ch : ndarray, shape (6,)
     se : ndarray, shape (4,)
-    ct : ndarray, shape (nc, 20)
+    ct : ndarray, shape (nc, kernel.NCF)
     bt : ndarray, shape (nb, 20)
     bag : ndarray, shape (8,)
     y0 : ndarray, shape (12 + 2 nb + 2 nc,)
@@ -233,6 +234,33 @@ def _seg(
     a = center - half * direction
     b = center + half * direction
     return (float(a[0]), float(a[1])), (float(b[0]), float(b[1]))
+
+
+def _glass_to_panel(
+    low: tuple[float, float],
+    high: tuple[float, float],
+    panel_a: tuple[float, float],
+    panel_b: tuple[float, float],
+) -> tuple[float, float]:
+    """Lower end of the windshield segment: where the glass line meets the panel face.
+
+    The glass is the line through ``high`` (upper end) and ``low`` (a point
+    of its lower part); it is run down to the line of the panel face
+    (``panel_a``-``panel_b``) so that no gap is left between the panel top
+    and the glass (a head used to pass over the panel top below ``low`` and
+    leave the modelled interior). Positions in m, vehicle frame. If the lines
+    do not meet below ``low``, ``low`` is kept.
+    """
+    d0 = np.subtract(low, high)
+    d1 = np.subtract(panel_b, panel_a)
+    det = d0[0] * -d1[1] + d1[0] * d0[1]
+    if abs(det) < 1e-12:
+        return low
+    rhs = np.subtract(panel_a, high)
+    t = (rhs[0] * -d1[1] + d1[0] * rhs[1]) / det
+    if t <= 1.0:
+        return low
+    return (float(high[0] + t * d0[0]), float(high[1] + t * d0[1]))
 
 
 def _body_arrays(
@@ -428,6 +456,13 @@ def _sagittal(ps: ParameterSet, occ: Occupant, rs: Restraints) -> Model:
         knee_gap = ps["frontal.knee.gap"]
     dash_a = (ps[dash_pre + "x0"] - track, ps[dash_pre + "z0"])
     dash_b = (ps[dash_pre + "x1"] - track, ps[dash_pre + "z1"])
+    ws_a = _glass_to_panel(
+        (ps["frontal.windshield.x0"] - track, ps["frontal.windshield.z0"]),
+        (ps["frontal.windshield.x1"] - track, ps["frontal.windshield.z1"]),
+        dash_a,
+        dash_b,
+    )
+    ws_b = (ps["frontal.windshield.x1"] - track, ps["frontal.windshield.z1"])
     contacts: list[ContactSpec] = [
         ContactSpec(
             "airbag_head",
@@ -481,6 +516,7 @@ def _sagittal(ps: ParameterSet, occ: Occupant, rs: Restraints) -> Model:
             enabled=has_wheel,
             bottom_cap=ps["frontal.wheel.bottom_cap"],
             crush_viscosity=ps["numerics.crush_viscosity"],
+            crush_limit=ps["frontal.wheel.crush_stroke"],
         ),
         ContactSpec(
             "wheel_head",
@@ -497,13 +533,14 @@ def _sagittal(ps: ParameterSet, occ: Occupant, rs: Restraints) -> Model:
             enabled=has_wheel,
             bottom_cap=ps["frontal.wheel.bottom_cap"],
             crush_viscosity=ps["numerics.crush_viscosity"],
+            crush_limit=ps["frontal.wheel.crush_stroke"],
         ),
         ContactSpec(
             "windshield_head",
             *head,
             head_r,
-            (ps["frontal.windshield.x0"] - track, ps["frontal.windshield.z0"]),
-            (ps["frontal.windshield.x1"] - track, ps["frontal.windshield.z1"]),
+            ws_a,
+            ws_b,
             stiff=ps["frontal.windshield.stiffness"],
             damp=ps["frontal.wheel.damping"],
             fcap=ps["frontal.windshield.cap"],
@@ -525,6 +562,7 @@ def _sagittal(ps: ParameterSet, occ: Occupant, rs: Restraints) -> Model:
             ramp=ramp,
             bottom_cap=ps["frontal.dash.bottom_cap"],
             crush_viscosity=ps["numerics.crush_viscosity"],
+            crush_limit=ps["frontal.dash.crush_stroke"],
         ),
         ContactSpec(
             "dash_chest",
@@ -542,6 +580,7 @@ def _sagittal(ps: ParameterSet, occ: Occupant, rs: Restraints) -> Model:
             ramp=ramp,
             bottom_cap=ps["frontal.dash.bottom_cap"],
             crush_viscosity=ps["numerics.crush_viscosity"],
+            crush_limit=ps["frontal.dash.crush_stroke"],
         ),
     ]
     # knee bolster: the knee moves with the pelvis; the bolster is placed for the
@@ -567,8 +606,37 @@ def _sagittal(ps: ParameterSet, occ: Occupant, rs: Restraints) -> Model:
             ramp=ramp,
             bottom_cap=ps["frontal.knee.bottom_cap"],
             crush_viscosity=ps["numerics.crush_viscosity"],
+            crush_limit=ps["frontal.knee.crush_stroke"],
         )
     )
+    # the thighs: a surface carried by the pelvis (kernel channel 4), from a
+    # quarter of the thigh length forward of the H-point to the top of the
+    # knee, for the head and chest of an occupant folding over the lap belt
+    tl = ps[pre + "thigh_length"]
+    thigh_a = (0.25 * tl, ps[pre + "thigh_top"])
+    thigh_b = (tl, ps[pre + "knee_height"] + knee_r)
+    for name, k_body, p_body, r_body, rad in (
+        ("thigh_head", *head, head_r),
+        ("thigh_chest", 5, h_s, r_s, 0.02),
+    ):
+        contacts.append(
+            ContactSpec(
+                name,
+                k_body,
+                p_body,
+                r_body,
+                rad,
+                thigh_a,
+                thigh_b,
+                motion=(1.0, 0.0),
+                channel=4,
+                stiff=ps["frontal.thigh.stiffness"],
+                damp=ps["frontal.thigh.damping"],
+                give=ps["frontal.thigh.give"],
+                k_bottom=kbot,
+                ramp=ramp,
+            )
+        )
     # seat back and head restraint (seat fixed): touching in the neutral posture
     sb = -math.radians(ps["seat.back_angle"])
     n_sb = _w(sb)
@@ -1033,7 +1101,7 @@ def _finish(
         rows.append(
             c.row(side)
             + [ux, uz, length, -uz * side, ux * side, c.share, c.bottom_cap, c.crush_viscosity]
-            + [c.hysteresis]
+            + [c.hysteresis, c.crush_limit]
         )
     ct = np.array(rows, dtype=np.float64).reshape(-1, K.NCF)
     bt = np.array(belts, dtype=np.float64).reshape(-1, K.NBF)

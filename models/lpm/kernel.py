@@ -95,8 +95,10 @@ _NO_NRT: dict[str, Any] = {"_nrt": False}
 #   moves by (mx, mz) times its motion channel: 0 fixed; 1 door intrusion (m);
 #   2 frontal airbag depth (BAG timing); 3 side airbag: door intrusion plus the
 #   BAG depth along the surface normal (a bag deploying from the door or roof
-#   rail toward the occupant and riding on the intrusion). law 0: elastic(-plastic)
-#   spring-damper; law 1: airbag (constant-force plateau, pressure rise, damper)
+#   rail toward the occupant and riding on the intrusion); 4 carried by the
+#   pelvis (the thighs: moves with the pelvis slide q[0], reacts on it).
+#   law 0: elastic(-plastic) spring-damper; law 1: airbag (constant-force
+#   plateau, pressure rise, damper)
 CONTACT_FIELDS = (
     "k_body",
     "p",
@@ -128,6 +130,7 @@ CONTACT_FIELDS = (
     "bottom_cap",
     "crush_viscosity",
     "hysteresis",
+    "crush_limit",
 )
 C_KB, C_P, C_R, C_RAD, C_AX, C_AZ, C_BX, C_BZ, C_MX, C_MZ, C_CH, C_LAW = range(12)
 C_K, C_K3, C_C, C_FCAP, C_GIVE, C_KBOT, C_RAMP, C_EN, C_SIDE = range(12, 21)
@@ -140,6 +143,9 @@ C_BCAP = 27
 C_CCR = 28
 # share of the elastic force NOT returned while the contact unloads (0: elastic)
 C_HYST = 29
+# stroke limit of the crush beyond the give (m; 0: unlimited): a crushed
+# structure that has used its stroke is backed by the next, stiffer one
+C_CLIM = 30
 NCF = len(CONTACT_FIELDS)
 
 #: Penetration speed (m/s) over which the unloading branch of a hysteretic
@@ -468,7 +474,9 @@ def _contact_force(
         # knee-bolster bracket) crushes at a force limit instead of acting as a
         # rigid wall; the crush is permanent (dissipative)
         bcap = ct[C_BCAP]
-        if bcap > 0.0 and f > bcap:
+        # until its stroke (C_CLIM) is used up: then the next, stiffer structure
+        # (firewall, cross-car beam) stops it through the bottoming spring
+        if bcap > 0.0 and f > bcap and (ct[C_CLIM] <= 0.0 or crush < ct[C_CLIM]):
             rate = (f - bcap) / ct[C_CCR]
             f = bcap
             if fe > bcap:
@@ -706,6 +714,11 @@ def rhs_into(
         if ch_id == 1.0:
             sv = s_door
             vv = v_door
+        elif ch_id == 4.0:
+            # a surface carried by the pelvis (the thighs): it moves with the
+            # pelvis slide q[0], and the contact force reacts on the pelvis
+            sv = q[0]
+            vv = qd[0]
         elif ch_id == 2.0 or ch_id == 3.0:
             if ch_id == 2.0:
                 sv = depth
@@ -768,7 +781,9 @@ def rhs_into(
         # penetration within (F - bottom_cap)/c of travel)
         if row[C_BCAP] > 0.0:
             crush = y[2 * NQ + 2 * nb + c]
-            if pen - row[C_GIVE] - crush > 2.0 * row[C_BCAP] / row[C_KBOT]:
+            crushing = row[C_CLIM] <= 0.0 or crush < row[C_CLIM]
+            # (a structure crushed to its stroke limit is a stop, not passed)
+            if crushing and pen - row[C_GIVE] - crush > 2.0 * row[C_BCAP] / row[C_KBOT]:
                 pen = -1.0
                 around = True
         ia = 2 * NQ + 2 * nb + nc + c
@@ -795,7 +810,11 @@ def rhs_into(
             dy[2 * NQ + 2 * nb + c] = crate * arm
             for a in range(NQ):
                 f[a] += fmag * (nx * jx[a] + nz * jz[a])
-            p_active += fmag * (nx * vsx + nz * vsz)
+            if ch_id == 4.0:
+                # reaction on the carrying pelvis: an internal force, no external work
+                f[0] -= fmag * (nx * row[C_MX] + nz * row[C_MZ])
+            else:
+                p_active += fmag * (nx * vsx + nz * vsz)
             if k == 4:
                 head_fx += fmag * nx
                 head_fz += fmag * nz

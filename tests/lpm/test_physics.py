@@ -9,6 +9,7 @@ import pytest
 
 from models.impact_mode import ImpactMode
 from models.lpm import kernel as K
+from models.lpm.assemble import Model
 from models.lpm.params import ParameterSet
 from models.lpm.pulses import haversine_pulse, ncap_frontal_pulse, side_pulse
 from models.lpm.simulate import LpmResult, _run_kernel, prepare, simulate
@@ -65,14 +66,8 @@ def test_energy_bounded_by_work_of_pulse_and_restraints(
     assert np.max(stored) > 10.0  # something happened
 
 
-def test_conservative_chain_keeps_energy(params: ParameterSet) -> None:
-    """With every damper, friction, belt and contact off, energy is conserved.
-
-    Checks the mass matrix and velocity-product terms of the multibody chain:
-    kinetic + spring energy must equal the work of the pulse.
-    """
-    pr = prepare(*ncap_frontal_pulse(), ImpactMode.FRONTAL, occupant(), params)
-    m = pr.model
+def _conservative(m: Model) -> Model:
+    """The model with every damper, the seat friction, the belts and all contacts off."""
     jt = m.jt.copy()
     jt[:, 2] = 0.0
     ch = m.ch.copy()
@@ -84,9 +79,17 @@ def test_conservative_chain_keeps_energy(params: ParameterSet) -> None:
     ct[:, K.C_EN] = 0.0
     bt = m.bt.copy()
     bt[:, K.B_EN] = 0.0
-    pr = dataclasses.replace(
-        pr, model=dataclasses.replace(m, jt=jt, ch=ch, se=se, ct=ct, bt=bt), duration_s=0.1
-    )
+    return dataclasses.replace(m, jt=jt, ch=ch, se=se, ct=ct, bt=bt)
+
+
+def test_conservative_chain_keeps_energy(params: ParameterSet) -> None:
+    """With every damper, friction, belt and contact off, energy is conserved.
+
+    Checks the mass matrix and velocity-product terms of the multibody chain:
+    kinetic + spring energy must equal the work of the pulse.
+    """
+    pr = prepare(*ncap_frontal_pulse(), ImpactMode.FRONTAL, occupant(), params)
+    pr = dataclasses.replace(pr, model=_conservative(pr.model), duration_s=0.1)
     _, _, diags, status = _run_kernel(pr, 2.5e-5, "rk4")
     assert status == 0
     dt = 2.5e-5
@@ -95,6 +98,44 @@ def test_conservative_chain_keeps_energy(params: ParameterSet) -> None:
     energy = diags[:, K.D_KE] + diags[:, K.D_V_INT]
     assert np.max(work) > 100.0
     assert np.max(np.abs(energy - work)) <= 0.005 * np.max(work)
+
+
+def test_thigh_contact_is_internal_and_conservative(params: ParameterSet) -> None:
+    """The thighs are carried by the pelvis (kernel channel 4) and react on it.
+
+    Zero pulse, every damper, friction, belt and other contact off, the upper
+    body thrown forward onto the thighs (20 rad/s at the lumbar, thoracic and
+    neck joints): kinetic + joint + contact spring energy stays constant. A
+    surface that moved with the pelvis without reacting on it would do work on
+    the occupant and break the balance.
+    """
+    t = np.arange(2001) * 1e-4
+    zero = np.zeros_like(t)
+    pr = prepare(t, zero, zero, ImpactMode.FRONTAL, occupant(belted=False, airbag=False), params)
+    model = _conservative(pr.model)
+    ct = model.ct
+    thigh = [model.contact_names.index("thigh_head"), model.contact_names.index("thigh_chest")]
+    for i in thigh:
+        assert ct[i, K.C_CH] == 4.0
+        ct[i, K.C_EN] = 1.0
+        ct[i, K.C_C] = 0.0
+    y0 = model.y0.copy()
+    y0[K.NQ + 1 : K.NQ + 4] = 20.0
+    model = dataclasses.replace(model, y0=y0)
+    dt = 2.5e-5
+    _, ys, diags, status = _run_kernel(
+        dataclasses.replace(pr, model=model, duration_s=0.2), dt, "rk4"
+    )
+    assert status == 0
+    nc, nb = ct.shape[0], model.bt.shape[0]
+    stored = diags[:, K.D_KE] + diags[:, K.D_V_INT]
+    for i in thigh:
+        pen = diags[:, K.DIAG_FIXED + nc + nb + i]
+        over = np.clip(pen - ct[i, K.C_GIVE], 0.0, None)
+        stored = stored + 0.5 * ct[i, K.C_K] * pen**2 + 0.5 * ct[i, K.C_KBOT] * over**2
+    assert np.max(diags[:, K.DIAG_FIXED + thigh[0]]) > 5e3  # the head does load the thighs
+    assert np.ptp(ys[:, 0]) > 0.3  # and the pelvis carrying them moves
+    assert np.max(np.abs(stored - stored[0])) <= 1e-3 * stored[0]
 
 
 def _penetration_ok(
@@ -177,6 +218,7 @@ def test_unrestrained_frontal_contacts_crush_at_their_force_limit(
             continue
         f = r.histories[f"force_{name}_n"]
         crush = r.histories[f"crush_{name}_m"]
+        assert np.max(crush) < ct[i, K.C_CLIM], name  # within its stroke at 56 km/h
         assert np.max(f) <= cap * (1.0 + 1e-12), name
         assert np.all(np.diff(crush) >= 0.0), name  # permanent
         pen = r.histories[f"penetration_{name}_m"]
@@ -191,6 +233,38 @@ def test_unrestrained_frontal_contacts_crush_at_their_force_limit(
     assert np.max(r.histories["head_accel_g"]) <= 2.0 * head_cap / head_mass / K.G0
     assert r.measures.hic15 is not None
     assert r.measures.hic15 < 2.0e4
+
+
+@pytest.mark.parametrize("body", list(Body))
+def test_crushable_structures_stop_at_the_end_of_their_stroke(
+    params: ParameterSet, body: Body
+) -> None:
+    """Unbelted, no airbag, 120 km/h: the crush of the wheel, panel and knee
+    bolster stops at its stroke (``frontal.*.crush_stroke``); beyond it the
+    force rises above the crush limit (the cross-car beam and firewall stop
+    the occupant) and the crush no longer grows. Before the stroke limits
+    the knee bolster crushed 0.75 m and the panel 0.67 m (50M)."""
+    occ = occupant(body, belted=False, airbag=False)
+    pr = prepare(*haversine_pulse(120.0, 0.09), ImpactMode.FRONTAL, occ, params)
+    r = simulate(*haversine_pulse(120.0, 0.09), ImpactMode.FRONTAL, occ, params)
+    assert r.status == 0
+    ct, names = pr.model.ct, pr.model.contact_names
+    stopped = 0
+    for i, name in enumerate(names):
+        limit, cap = ct[i, K.C_CLIM], ct[i, K.C_BCAP]
+        if cap <= 0.0:
+            continue
+        assert limit > 0.0, name
+        crush = r.histories[f"crush_{name}_m"]
+        f = r.histories[f"force_{name}_n"]
+        # the last step may overshoot by one step's crush: (F - cap)/c * dt
+        assert np.max(crush) <= limit + 2e-3, name
+        before = crush < limit
+        assert np.max(f[before]) <= cap * (1.0 + 1e-12), name
+        if np.max(crush) >= limit:
+            stopped += 1
+            assert np.max(f[~before]) > cap, name
+    assert stopped >= 1
 
 
 def test_hysteretic_contact_dissipates_its_share_of_the_loop(params: ParameterSet) -> None:
