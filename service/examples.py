@@ -96,7 +96,7 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         },
         "lpm_parameters:compact_sedan": {
             "version": "compact_sedan",
-            "sha256": "f94d2833d56ac157b05df841485d9f364f6bf7b659444c5daa526397b8566a53",
+            "sha256": "377f289f8230a3314511bc36ac5c55e770e8a28d14af9b3c75b11ce07a808ef6",
         },
         "lpm_code": {
             "version": "0.2.0",
@@ -108,7 +108,7 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         },
         "surrogates": {
             "version": "3.0.2.0",
-            "sha256": "529c60339d8ee6cbdb659df294e719116e6d9d4d3cf6db7f55bb764be35c210d",
+            "sha256": "a5ae57bd2b9fac4963765ec449495e754eefee69f2e3ca12c4b12826a86544f8",
         },
         "surrogate_evaluation": {
             "version": "2",

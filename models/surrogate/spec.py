@@ -122,9 +122,9 @@ INPUT_NAMES: Final[tuple[str, ...]] = (
 #: onset (HIC15 ~20 -> ~800 within a few km/h, on a boundary curved in posture,
 #: seat track and duration) converges slowly with design size and piece width.
 #: After the frontal interior was closed (glass down to the panel, crush
-#: strokes, thighs; 2026-12-01) the same 4 pieces give that family 8.5 % /
-#: 7.5 %, 97.3 %; the worst is then the belted 5F without airbag (14.1 % /
-#: 10.8 %, 95.3 %), whose head just reaches the wheel in part of the domain.
+#: strokes, thighs; 2026-12-01) the same 4 pieces give that family 8.9 % /
+#: 7.5 %, 97.3 %; the worst is then the belted 5F without airbag (15.0 % /
+#: 10.8 %, 94.7 %), whose head just reaches the wheel in part of the domain.
 DELTA_V_PIECES_KMH: Final[tuple[float, ...]] = (5.0, 20.0, 40.0, 70.0, 120.0)
 
 #: Each piece's design extends beyond its interval by this fraction of its
