@@ -125,6 +125,15 @@ INPUT_NAMES: Final[tuple[str, ...]] = (
 #: strokes, thighs; 2026-12-01) the same 4 pieces give that family 8.9 % /
 #: 7.5 %, 97.3 %; the worst is then the belted 5F without airbag (15.0 % /
 #: 10.8 %, 94.7 %), whose head just reaches the wheel in part of the domain.
+#: Scans of direct LPM runs through her worst held-out points (delta-V in
+#: 0.5 km/h, seat track in 2 mm and posture in 0.5 deg steps, 2026-12-01) show
+#: the response is smooth but hinged: HIC15 flat at 26-66 until the head meets
+#: the wheel, then rising linearly (e.g. 33 -> 136 over +3 km/h). The PCE rounds
+#: the hinge and puts the flat side at about twice the LPM value (33 vs 83),
+#: so the median relative error is made by HIC15 values of 30-150, below every
+#: injury threshold. A likely remedy, not built: split each piece's domain by
+#: a signed head-clearance output of the LPM (smooth through the onset) and
+#: fit each side with its own PCE.
 DELTA_V_PIECES_KMH: Final[tuple[float, ...]] = (5.0, 20.0, 40.0, 70.0, 120.0)
 
 #: Each piece's design extends beyond its interval by this fraction of its
