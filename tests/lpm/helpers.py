@@ -2,7 +2,18 @@
 
 from __future__ import annotations
 
+from models.lpm.params import ParameterSet
 from models.notification import AirbagState, Body, Occupant, Seat
+
+#: Largest load an occupant segment of these models develops against a contact
+#: in the checked cases, N: the travel it produces in the bottoming spring is
+#: the margin allowed beyond a contact's give (40 mm at 1e6 N/m).
+BOTTOMING_MARGIN_N = 40e3
+
+
+def bottoming_margin_m(params: ParameterSet) -> float:
+    """Travel of :data:`BOTTOMING_MARGIN_N` into the bottoming spring, m."""
+    return BOTTOMING_MARGIN_N / params["seat.bottoming_stiffness"]
 
 
 def occupant(

@@ -21,7 +21,7 @@ from models.lpm.params import ParameterSet
 from models.lpm.pulses import haversine_pulse
 from models.lpm.simulate import simulate
 from models.notification import Body
-from tests.lpm.helpers import occupant
+from tests.lpm.helpers import bottoming_margin_m, occupant
 
 RESTRAINTS = ((True, True), (True, False), (False, True), (False, False))
 TRACKS_MM = (-120.0, 0.0, 120.0)
@@ -39,7 +39,7 @@ def test_head_centre_stays_inside_the_interior(params: ParameterSet, body: Body)
     reach = (
         params["frontal.dash.give"]
         + params["frontal.dash.crush_stroke"]
-        + 40e3 / params["seat.bottoming_stiffness"]
+        + bottoming_margin_m(params)
         - params[f"body.{body.value}.head_radius"]
     )
     panel_x = max(params["frontal.dash.x0"], params["frontal.dash.x1"]) + reach

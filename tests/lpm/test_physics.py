@@ -14,9 +14,13 @@ from models.lpm.params import ParameterSet
 from models.lpm.pulses import haversine_pulse, ncap_frontal_pulse, side_pulse
 from models.lpm.simulate import LpmResult, _run_kernel, prepare, simulate
 from models.notification import Body
-from tests.lpm.helpers import occupant
+from tests.lpm.helpers import bottoming_margin_m, occupant
 
 MODES = list(ImpactMode)
+#: Crush allowed past a structure's stroke, m: the step in which the stroke is
+#: reached adds (F - bottom_cap) / crush_viscosity * dt (2 mm: a force 4 kN
+#: above the cap at numerics.crush_viscosity 200 N s/m and dt 1e-4 s).
+CRUSH_OVERSHOOT_M = 2e-3
 
 
 def _pulse(mode: ImpactMode) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -172,7 +176,7 @@ def test_no_penetration_beyond_modelled_give(
     occ = occupant(body)
     pr = prepare(*_pulse(mode), mode, occ, params)
     r = simulate(*_pulse(mode), mode, occ, params)
-    margin = 40e3 / params["seat.bottoming_stiffness"]
+    margin = bottoming_margin_m(params)
     assert _penetration_ok(r, pr.model.ct, pr.model.contact_names, margin) == []
 
 
@@ -257,8 +261,8 @@ def test_crushable_structures_stop_at_the_end_of_their_stroke(
         assert limit > 0.0, name
         crush = r.histories[f"crush_{name}_m"]
         f = r.histories[f"force_{name}_n"]
-        # the last step may overshoot by one step's crush: (F - cap)/c * dt
-        assert np.max(crush) <= limit + 2e-3, name
+        # the last step may overshoot by one step's crush, (F - cap)/c * dt: 2 mm
+        assert np.max(crush) <= limit + CRUSH_OVERSHOOT_M, name
         before = crush < limit
         assert np.max(f[before]) <= cap * (1.0 + 1e-12), name
         if np.max(crush) >= limit:
