@@ -519,6 +519,7 @@ def _lpm_occupant(
                 duration_ms=pulse.haversine.duration_ms,
                 posture_sd_deg=posture_sd,
                 seat_track_sd_mm=track_sd,
+                age_years=lpm_occupant.age_years,  # the chest curve the direct run used
             )
         except (KeyError, ValueError) as exc:
             assumptions.append(

@@ -111,12 +111,12 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
             "sha256": "a5ae57bd2b9fac4963765ec449495e754eefee69f2e3ca12c4b12826a86544f8",
         },
         "surrogate_evaluation": {
-            "version": "2",
-            "sha256": "d8d016ac765edad3b58e8069ea356aa6858a07a92b6c2504270255f99fda8831",
+            "version": "3",
+            "sha256": "9d527481c4547d14fbe4b4b86d1924819f16abbe8219937e9e286c8ccf3e2bca",
         },
         "triage_code": {
             "version": "0.2.0",
-            "sha256": "1fe10dede9a0dbd5df3eabfb33f87ef4b67cb87aa6b468fa441c782427605508",
+            "sha256": "acf23bf4f092d3094d93c33dd4289f8e624d78d134158b9d6b9f1f0b9cf814ff",
         },
     },
     "timings_ms": {"pulse": 0.9, "occupants": 12.4, "engine_total": 13.3},

@@ -87,8 +87,8 @@ def test_shipped_heldout_agreement_at_the_service_decision() -> None:
 
 @pytest.mark.xfail(
     strict=True,
-    reason="open item: per family, three frontal families and the belted 5F in rear impacts"
-    " stay at 94.7-96.7 % (REPORT.md Table B)",
+    reason="open item: per family, the unbelted 50M with airbag and the belted 5F without, both"
+    " frontal, stay at 96.7 % (5 of 150 held-out points; REPORT.md Table B)",
 )
 def test_shipped_heldout_agreement_target_per_family() -> None:
     import numpy as np
@@ -199,3 +199,33 @@ def test_measure_interval_margin_is_calibrated_on_the_held_out_runs() -> None:
         assert lo <= p_lo <= p_hi <= hi, k
         assert lo <= served.measures[k] <= hi, k
     assert served.iss_ci95[0] <= plain.iss_ci95[0] <= plain.iss_ci95[1] <= served.iss_ci95[1]
+
+
+def test_served_p_is_the_assessment_of_the_served_measures_at_the_occupant_age() -> None:
+    """Evaluation 3: P(ISS >= 15) comes from the surrogate's measures through the
+    risk curves, with the occupant's age (the direct LPM run uses it for the chest
+    deflection curve). Without sensor error every sample is the reading, so the
+    served P is the scalar assessment of the served measures; an older occupant's
+    chest gives a higher P at the same crash."""
+    from models.injury.assessment import InjuryMeasures, assess
+    from models.notification import Body
+
+    fam = SurrogateLibrary.load().families()["frontal__male_50th__belted__no_airbag"]
+    kw = {
+        "delta_v_kmh": 62.0,
+        "angle_deg": 0.0,
+        "posture_deg": 5.8,
+        "seat_track_mm": 0.0,
+        "duration_ms": 90.0,
+        "posture_sd_deg": 0.0,
+        "seat_track_sd_mm": 0.0,
+    }
+    by_age = {}
+    for age in (None, 25.0, 80.0):
+        r = fam.propagate(**kw, age_years=age)
+        ref = assess(InjuryMeasures(**r.measures), Body.MALE_50TH, age, "frontal")
+        assert r.p_iss15 == pytest.approx(ref.p_iss15, rel=1e-9, abs=1e-12)
+        assert r.p_iss15_ci95[0] <= r.p_iss15 <= r.p_iss15_ci95[1]
+        by_age[age] = r.p_iss15
+    assert by_age[80.0] > by_age[25.0]
+    assert 0.01 < by_age[None] < 0.99, "the check is made where P is not saturated"
