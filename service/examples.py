@@ -112,7 +112,7 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         },
         "surrogate_evaluation": {
             "version": "3",
-            "sha256": "9d527481c4547d14fbe4b4b86d1924819f16abbe8219937e9e286c8ccf3e2bca",
+            "sha256": "875904418574c4cd34581a39cdad65f15fb64f5959fc9b4fb484b4ab1a116cc1",
         },
         "triage_code": {
             "version": "0.2.0",

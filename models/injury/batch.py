@@ -22,7 +22,7 @@ microseconds per call). This module computes the same numbers over arrays:
   the whole batch are skipped.
 
 Why hand-written: no library scores ISS; the scalar functions are the
-reference, and ``tests/injury/test_batch.py`` holds the two paths equal
+reference, and ``tests/injury/test_injury_batch.py`` holds the two paths equal
 (relative 1e-12) over random measures of every mode, body and age option.
 """
 
@@ -74,23 +74,28 @@ def _monotone(curve: Curve) -> Curve:
     return out
 
 
-def _hic_curves(hic: FloatArray) -> Curve:
-    """``risk.hic_prasad_mertz_1999`` per level (the same operations on each level's row)."""
+def _hic_curves(hic: FloatArray, top: int = MAX_AIS) -> Curve:
+    """``risk.hic_prasad_mertz_1999`` per level, AIS 1 to `top` (the same operations)."""
     positive = hic > 0.0
     safe = np.where(positive, hic, 1.0)
     hyp = risk._PRASAD_MERTZ_HYPERBOLIC / safe
     raw = {
         k + 1: np.where(positive, expit(beta * safe - alpha - hyp), 0.0)
         for k, (alpha, beta) in enumerate(
-            zip(risk.HIC_PRASAD_MERTZ_ALPHA, risk.HIC_PRASAD_MERTZ_BETA, strict=True)
+            zip(risk.HIC_PRASAD_MERTZ_ALPHA[:top], risk.HIC_PRASAD_MERTZ_BETA[:top], strict=True)
         )
     }
     return _monotone(raw)
 
 
-def _nij_curves(nij: FloatArray) -> Curve:
-    """``risk.nij_eppinger_1999`` per published level (AIS 2-5)."""
-    raw = {level: risk._logistic(a, b, nij) for level, (a, b) in risk.NIJ_EPPINGER_1999.items()}
+def _nij_curves(nij: FloatArray, top: int = MAX_AIS) -> Curve:
+    """``risk.nij_eppinger_1999`` per published level (AIS 2-5), up to the first one >= `top`."""
+    raw: Curve = {}
+    for level in sorted(risk.NIJ_EPPINGER_1999):
+        a, b = risk.NIJ_EPPINGER_1999[level]
+        raw[level] = risk._logistic(a, b, nij)
+        if level >= top:
+            break
     return _monotone(raw)
 
 
@@ -315,34 +320,16 @@ def _head_neck_at(
     """
     top = max(levels) if levels else 0
     out = {k: np.zeros(n) for k in levels}
+    curves: list[Curve] = []
     if "hic15" in values and top:
-        h = values["hic15"]
-        positive = h > 0.0
-        safe = np.where(positive, h, 1.0)
-        hyp = risk._PRASAD_MERTZ_HYPERBOLIC / safe
-        run: FloatArray | None = None
-        for k in range(1, top + 1):
-            alpha, beta = risk.HIC_PRASAD_MERTZ_ALPHA[k - 1], risk.HIC_PRASAD_MERTZ_BETA[k - 1]
-            raw = np.where(positive, expit(beta * safe - alpha - hyp), 0.0)
-            run = raw if run is None else np.minimum(run, raw)
-            if k in out:
-                out[k] = run
+        curves.append(_hic_curves(values["hic15"], top))
     if "nij" in values and top:
-        x = values["nij"]
-        published = sorted(risk.NIJ_EPPINGER_1999)
-        run = None
-        at: dict[int, FloatArray] = {}
-        for level in published:
-            if level > max(top, published[0]):
-                break
-            a_, b_ = risk.NIJ_EPPINGER_1999[level]
-            raw = risk._logistic(a_, b_, x)
-            run = raw if run is None else np.minimum(run, raw)
-            at[level] = run
-        for k in levels:
-            first = next((j for j in published if j >= k), None)
+        curves.append(_nij_curves(values["nij"], top))
+    for k in levels:
+        for c in curves:
+            first = next((j for j in sorted(c) if j >= k), None)
             if first is not None:
-                out[k] = np.maximum(out[k], at[first])
+                out[k] = np.maximum(out[k], c[first])
     return {k: np.minimum(np.maximum(v, 0.0), 1.0) for k, v in out.items()}
 
 
