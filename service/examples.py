@@ -112,7 +112,7 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         },
         "surrogate_evaluation": {
             "version": "3",
-            "sha256": "875904418574c4cd34581a39cdad65f15fb64f5959fc9b4fb484b4ab1a116cc1",
+            "sha256": "0b508e65827ad51122a9d69f7531bd18af51ebe717f220f5e25bdd9221ede3b7",
         },
         "triage_code": {
             "version": "0.2.0",

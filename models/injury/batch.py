@@ -31,6 +31,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import fields
+from functools import lru_cache
 from typing import Final
 
 import numpy as np
@@ -56,8 +57,6 @@ FloatArray = npt.NDArray[np.float64]
 #: Measures the batch path reads (the fields of ``InjuryMeasures``).
 MEASURE_NAMES: Final[tuple[str, ...]] = tuple(f.name for f in fields(InjuryMeasures))
 _SIDE_MODES: Final[frozenset[ImpactMode]] = frozenset({ImpactMode.NEAR_SIDE, ImpactMode.FAR_SIDE})
-#: Regions the closed-form sum runs over (every other region must carry no risk).
-_SUM_REGIONS: Final[tuple[str, str, str]] = ("head_neck", "chest", "abdomen")
 
 
 #: A curve of one measure: P(AIS >= level) by published level, each shape (n,).
@@ -226,21 +225,12 @@ def _regions(
     return {r: _combine(c) for r, c in curves.items()}
 
 
-def _distribution(cumulative: FloatArray) -> FloatArray:
-    """P(AIS = 0..6), shape (7, n), from P(AIS >= 1..6), shape (6, n).
-
-    As ``scores.ais_distribution_from_cumulative`` per column.
-    """
-    n = cumulative.shape[1]
-    full = np.concatenate((np.ones((1, n)), cumulative, np.zeros((1, n))), axis=0)
-    p = np.maximum(full[:-1] - full[1:], 0.0)
-    return np.asarray(p / p.sum(axis=0), dtype=np.float64)
-
-
+@lru_cache(maxsize=8)
 def _a_min(threshold: float) -> npt.NDArray[np.int64]:
     """Least head-neck level a with ISS(a, b, c) >= threshold, per (b, c), shape (7, 7).
 
     6 when no level reaches it (a head-neck AIS 6 gives ISS 75, the largest).
+    Cached and read-only: the request path asks for it twice per occupant.
     """
     out = np.full((MAX_AIS + 1, MAX_AIS + 1), MAX_AIS, dtype=np.int64)
     for b in range(MAX_AIS + 1):
@@ -250,46 +240,8 @@ def _a_min(threshold: float) -> npt.NDArray[np.int64]:
                 if score >= threshold:
                     out[b, c] = a
                     break
+    out.flags.writeable = False
     return out
-
-
-def p_iss_at_least_batch(cumulative: Mapping[str, FloatArray], threshold: float = 15) -> FloatArray:
-    """Exact P(ISS >= threshold) for n sets of regional cumulative risks.
-
-    Parameters
-    ----------
-    cumulative : mapping of str to ndarray, each shape (6, n)
-        P(AIS >= 1..6) per region (:func:`region_cumulative_risk_batch`);
-        absent regions are uninjured. Only head and neck, chest and abdomen
-        may carry risk (the regions the LPM measures inform).
-    threshold : float, optional
-        ISS threshold, at most 75.
-
-    Returns
-    -------
-    ndarray, shape (n,)
-        In [0, 1]; regions independent, as in ``models.injury.scores.p_iss_at_least``.
-    """
-    t = float(threshold)
-    if not (math.isfinite(t) and t <= ISS_MAX):
-        raise ValueError("`threshold` must be finite and at most 75")
-    for name, c in cumulative.items():
-        if name not in _SUM_REGIONS and np.any(c > 0.0):
-            raise ValueError(f"region {name!r} carries risk; the batch sum covers {_SUM_REGIONS}")
-    n = next(iter(cumulative.values())).shape[1] if cumulative else 0
-    zero = np.zeros((MAX_AIS, n))
-    pa, pb, pc = (_distribution(cumulative.get(r, zero)) for r in _SUM_REGIONS)
-    # P(head_neck >= k), k = 0..6 (tail sums of its distribution)
-    tail = np.empty_like(pa)
-    tail[MAX_AIS] = pa[MAX_AIS]
-    for k in range(MAX_AIS - 1, -1, -1):
-        tail[k] = tail[k + 1] + pa[k]
-    a_min = _a_min(t)
-    total = np.zeros(n)
-    for lb in np.flatnonzero(np.any(pb > 0.0, axis=1)):
-        for lc in np.flatnonzero(np.any(pc > 0.0, axis=1)):
-            total += pb[lb] * pc[lc] * tail[a_min[lb, lc]]
-    return np.minimum(np.maximum(total, 0.0), 1.0)
 
 
 def _levels(c: Curve, n: int) -> dict[int, FloatArray]:
@@ -333,6 +285,45 @@ def _head_neck_at(
     return {k: np.minimum(np.maximum(v, 0.0), 1.0) for k, v in out.items()}
 
 
+def p_iss_at_least_batch(
+    values: Mapping[str, npt.ArrayLike],
+    body: Body,
+    age_years: float | None = None,
+    impact_mode: ImpactMode | str = ImpactMode.FRONTAL,
+    threshold: float = ISS_TRIAGE_THRESHOLD,
+) -> FloatArray:
+    """Exact P(ISS >= threshold) of n measure sets, as ``scores.p_iss_at_least`` of each.
+
+    Parameters are those of :func:`region_cumulative_risk_batch`, and
+    `threshold` (at most 75). The head and neck enter only through
+    P(AIS >= k) at the levels k that the chest and abdomen levels leave to
+    reach the threshold (:func:`_head_neck_at`), which saves the exponentials
+    of the other levels (the surrogate's request path calls this on about
+    15,000 sets); regions other than head and neck, chest and abdomen carry
+    no risk from the LPM measures.
+
+    Returns
+    -------
+    ndarray, shape (n,)
+        In [0, 1]; regions independent.
+    """
+    t = float(threshold)
+    if not (math.isfinite(t) and t <= ISS_MAX):
+        raise ValueError("`threshold` must be finite and at most 75")
+    v, n = _values(values)
+    others = {k: x for k, x in v.items() if k not in ("hic15", "nij")}
+    cum = _regions(others, n, body, age_years, impact_mode)
+    pb, pc = _levels(cum["chest"], n), _levels(cum["abdomen"], n)
+    a_min = _a_min(t)
+    pairs = [(b, c) for b in pb for c in pc]
+    head = _head_neck_at(v, {int(a_min[b, c]) for b, c in pairs} - {0}, n)
+    total = np.zeros(n)
+    for b, c in pairs:
+        k = int(a_min[b, c])
+        total += pb[b] * pc[c] * (head[k] if k else 1.0)
+    return np.minimum(np.maximum(total, 0.0), 1.0)
+
+
 def p_iss15_batch(
     values: Mapping[str, npt.ArrayLike],
     body: Body,
@@ -341,25 +332,10 @@ def p_iss15_batch(
 ) -> FloatArray:
     """P(ISS >= 15) of n measure sets; equals ``assess(...).p_iss15`` of each set.
 
-    Parameters are those of :func:`region_cumulative_risk_batch`. The head and
-    neck enter only through P(AIS >= k) at the levels k that the chest and
-    abdomen levels leave to reach ISS 15 (:func:`_head_neck_at`), which saves
-    the exponentials of the other levels (the surrogate's request path calls
-    this on about 15,000 sets).
+    :func:`p_iss_at_least_batch` at the triage threshold.
 
     Returns
     -------
     ndarray, shape (n,)
     """
-    v, n = _values(values)
-    others = {k: x for k, x in v.items() if k not in ("hic15", "nij")}
-    cum = _regions(others, n, body, age_years, impact_mode)
-    pb, pc = _levels(cum["chest"], n), _levels(cum["abdomen"], n)
-    a_min = _a_min(ISS_TRIAGE_THRESHOLD)
-    pairs = [(b, c) for b in pb for c in pc]
-    head = _head_neck_at(v, {int(a_min[b, c]) for b, c in pairs} - {0}, n)
-    total = np.zeros(n)
-    for b, c in pairs:
-        k = int(a_min[b, c])
-        total += pb[b] * pc[c] * (head[k] if k else 1.0)
-    return np.minimum(np.maximum(total, 0.0), 1.0)
+    return p_iss_at_least_batch(values, body, age_years, impact_mode, ISS_TRIAGE_THRESHOLD)

@@ -752,7 +752,9 @@ class SurrogateFamily:
         # deviation from the point PCEs on the same subset)
         rm = raw[self._meas_rows]
         p_point = self._p_from_raw(rm[:, 0, 1:], age_years)  # (n,)
-        p_sub = self._p_from_raw(rm[:, :, 1 + _P_SUBSET], age_years)  # (B + 1, n_sub)
+        p_sub = np.empty((nb1, _P_SUBSET.size))  # (B + 1, n_sub)
+        p_sub[0] = p_point[_P_SUBSET]
+        p_sub[1:] = self._p_from_raw(rm[:, 1:, 1 + _P_SUBSET], age_years)
         sub_means = p_sub.mean(axis=1)
         # 95% intervals of measures and ISS: order statistics of the pooled
         # (replicates x samples) values on the fitted scale, then transformed
