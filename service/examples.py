@@ -96,23 +96,23 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         },
         "lpm_parameters:compact_sedan": {
             "version": "compact_sedan",
-            "sha256": "377f289f8230a3314511bc36ac5c55e770e8a28d14af9b3c75b11ce07a808ef6",
+            "sha256": "9d737f0495a54a12be6138e2dcd68ca87608e70016c9fb2841185d83c0220b78",
         },
         "lpm_code": {
             "version": "0.2.0",
-            "sha256": "0380c7851ba9a1ed2287cee3d7c3e37f41a1d2b2921ab52ad768806c8746f318",
+            "sha256": "493bbc3a393ae3794ca10aa33e34bbdd1d08b3e9e58159ea3f88a9bd1c83396f",
         },
         "risk_calibration": {
             "version": "1",
             "sha256": "4811df3c925fe85a84800deb135d25e010ab786df25562441ef01616113e0aa5",
         },
         "surrogates": {
-            "version": "3.0.2.0",
-            "sha256": "a5ae57bd2b9fac4963765ec449495e754eefee69f2e3ca12c4b12826a86544f8",
+            "version": "4.0.2.0",
+            "sha256": "beda62d71092da52792889befdefb6f8520251535307b3f4bdf475b9c861bd6e",
         },
         "surrogate_evaluation": {
-            "version": "3",
-            "sha256": "0b508e65827ad51122a9d69f7531bd18af51ebe717f220f5e25bdd9221ede3b7",
+            "version": "4",
+            "sha256": "fc63c84be8860491ab0892cf435b3a12738cfa368abf47e17c1d3ea819976234",
         },
         "triage_code": {
             "version": "0.2.0",

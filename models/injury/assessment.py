@@ -56,18 +56,18 @@ Rules, all documented choices:
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from dataclasses import dataclass, fields
-from typing import Final
 
 import numpy as np
 import numpy.typing as npt
 
 from models.impact_mode import ImpactMode
-from models.injury import risk
-from models.injury.criteria import cti as _cti
+from models.injury.batch import region_cumulative_risk_batch
+from models.injury.measures import InjuryMeasures
 from models.injury.scores import (
     ISS_REGIONS,
+    ISS_TRIAGE_THRESHOLD,
+    MAX_AIS,
     ais_distribution_from_cumulative,
     ais_level,
     iss,
@@ -82,43 +82,6 @@ __all__ = [
     "assess",
     "region_cumulative_risk",
 ]
-
-#: Triage threshold of the reference paper: ISS >= 15 (Wikipedia's "major
-#: trauma" is ISS > 15; the paper triages on >= 15). [V] reference section 3.
-ISS_TRIAGE_THRESHOLD: Final[int] = 15
-
-_SIDE_MODES: Final[frozenset[ImpactMode]] = frozenset({ImpactMode.NEAR_SIDE, ImpactMode.FAR_SIDE})
-
-
-@dataclass(frozen=True)
-class InjuryMeasures:
-    """Scalar injury measures of one occupant; None where not available.
-
-    Attributes
-    ----------
-    hic15 : float or None
-        HIC15, dimensionless.
-    nij : float or None
-        Peak Nij, dimensionless.
-    chest_deflection_mm : float or None
-        Peak chest (frontal) or rib (side) deflection, mm.
-    chest_vc_m_s : float or None
-        Chest VCmax, m/s.
-    chest_a3ms_g : float or None
-        3 ms clip chest acceleration, g.
-    chest_cti : float or None
-        Combined thoracic index, dimensionless.
-    abdomen_vc_m_s : float or None
-        Abdominal VCmax, m/s.
-    """
-
-    hic15: float | None = None
-    nij: float | None = None
-    chest_deflection_mm: float | None = None
-    chest_vc_m_s: float | None = None
-    chest_a3ms_g: float | None = None
-    chest_cti: float | None = None
-    abdomen_vc_m_s: float | None = None
 
 
 @dataclass(frozen=True)
@@ -151,28 +114,6 @@ def _value(measures: InjuryMeasures, name: str) -> float | None:
     if not (math.isfinite(x) and x >= 0.0):
         raise ValueError(f"`measures.{name}` must be a finite non-negative number, got {v!r}.")
     return x
-
-
-def _at_level(level: int, p: npt.ArrayLike) -> npt.NDArray[np.float64]:
-    out = np.full(6, np.nan)
-    out[level - 1] = float(np.asarray(p))
-    return out
-
-
-def _combine(curves: list[npt.NDArray[np.float64]]) -> npt.NDArray[np.float64]:
-    """Combine partial cumulative curves of one region (see module docstring)."""
-    out = np.zeros(6)
-    if not curves:
-        return out
-    stacked = np.vstack(curves)
-    known = ~np.isnan(stacked)
-    best = np.where(known, stacked, -np.inf).max(axis=0)
-    running = 0.0
-    for k in range(5, -1, -1):
-        if np.isfinite(best[k]):
-            running = max(running, float(best[k]))
-        out[k] = running
-    return np.clip(out, 0.0, 1.0)
 
 
 def region_cumulative_risk(
@@ -208,66 +149,16 @@ def region_cumulative_risk(
             raise ValueError(
                 f"`age_years` must be a finite non-negative number, got {age_years!r}."
             )
-    for f in fields(InjuryMeasures):
-        _value(measures, f.name)  # validate every field up front
-    side = mode in _SIDE_MODES
-
-    curves: dict[str, list[npt.NDArray[np.float64]]] = {r: [] for r in ISS_REGIONS}
-
-    def add(region: str, name: str, curve: Callable[[float], npt.NDArray[np.float64]]) -> None:
-        v = _value(measures, name)
-        if v is not None:
-            curves[region].append(curve(v))
-
-    add("head_neck", "hic15", risk.hic_prasad_mertz_1999)
-    add("head_neck", "nij", risk.nij_eppinger_1999)
-
-    if side:
-        add(
-            "chest",
-            "chest_deflection_mm",
-            lambda d: _at_level(3, risk.thorax_rib_deflection_ais3_ncap_2008_es2re(d)),
-        )
-        add(
-            "chest",
-            "chest_vc_m_s",
-            lambda v: _at_level(4, risk.chest_vc_ais4_viano_1989_lateral(v)),
-        )
-        add(
-            "abdomen",
-            "abdomen_vc_m_s",
-            lambda v: _at_level(4, risk.abdomen_vc_ais4_viano_1989_lateral(v)),
-        )
-    else:
-        if age is None:
-            add(
-                "chest",
-                "chest_deflection_mm",
-                lambda d: _at_level(3, risk.chest_deflection_ais3_ncap_2008(d, body)),
-            )
-        else:
-            age_ = age
-            add(
-                "chest",
-                "chest_deflection_mm",
-                lambda d: _at_level(3, risk.chest_deflection_ais3_laituri_2005(d, age_, body)),
-            )
-        add("chest", "chest_vc_m_s", lambda v: _at_level(4, risk.chest_vc_ais4_lau_viano_1986(v)))
-        add(
-            "abdomen",
-            "abdomen_vc_m_s",
-            lambda v: _at_level(5, risk.abdomen_vc_ais5_lau_viano_1986(v)),
-        )
-
-    cti_value = _value(measures, "chest_cti")
-    a3ms = _value(measures, "chest_a3ms_g")
-    dmax = _value(measures, "chest_deflection_mm")
-    if cti_value is None and a3ms is not None and dmax is not None:
-        cti_value = _cti(a3ms, dmax, body)
-    if cti_value is not None:
-        curves["chest"].append(_at_level(3, risk.chest_cti_ais3_kleinberger_1998(cti_value)))
-
-    return {region: _combine(c) for region, c in curves.items()}
+    present = {
+        f.name: np.array([v])
+        for f in fields(InjuryMeasures)
+        if (v := _value(measures, f.name)) is not None
+    }
+    if not present:  # no evidence: no risk in any region
+        return {region: np.zeros(MAX_AIS) for region in ISS_REGIONS}
+    # one curve selection and combination for the scalar and the batch paths
+    blocks = region_cumulative_risk_batch(present, body, age, mode)
+    return {region: np.ascontiguousarray(b[:, 0]) for region, b in blocks.items()}
 
 
 def assess(

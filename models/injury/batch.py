@@ -36,13 +36,12 @@ from typing import Final
 
 import numpy as np
 import numpy.typing as npt
-from scipy.special import expit
 
 from models.impact_mode import ImpactMode
 from models.injury import risk
-from models.injury.assessment import ISS_TRIAGE_THRESHOLD, InjuryMeasures
 from models.injury.criteria import CTI_INTERCEPTS
-from models.injury.scores import ISS_MAX, ISS_REGIONS, MAX_AIS
+from models.injury.measures import InjuryMeasures
+from models.injury.scores import ISS_MAX, ISS_REGIONS, ISS_TRIAGE_THRESHOLD, MAX_AIS
 from models.notification import Body
 
 __all__ = [
@@ -74,25 +73,15 @@ def _monotone(curve: Curve) -> Curve:
 
 
 def _hic_curves(hic: FloatArray, top: int = MAX_AIS) -> Curve:
-    """``risk.hic_prasad_mertz_1999`` per level, AIS 1 to `top` (the same operations)."""
-    positive = hic > 0.0
-    safe = np.where(positive, hic, 1.0)
-    hyp = risk._PRASAD_MERTZ_HYPERBOLIC / safe
-    raw = {
-        k + 1: np.where(positive, expit(beta * safe - alpha - hyp), 0.0)
-        for k, (alpha, beta) in enumerate(
-            zip(risk.HIC_PRASAD_MERTZ_ALPHA[:top], risk.HIC_PRASAD_MERTZ_BETA[:top], strict=True)
-        )
-    }
-    return _monotone(raw)
+    """``risk.hic_prasad_mertz_1999`` per level, AIS 1 to `top`."""
+    return _monotone({k: risk.hic_prasad_mertz_1999_level(hic, k) for k in range(1, top + 1)})
 
 
 def _nij_curves(nij: FloatArray, top: int = MAX_AIS) -> Curve:
     """``risk.nij_eppinger_1999`` per published level (AIS 2-5), up to the first one >= `top`."""
     raw: Curve = {}
     for level in sorted(risk.NIJ_EPPINGER_1999):
-        a, b = risk.NIJ_EPPINGER_1999[level]
-        raw[level] = risk._logistic(a, b, nij)
+        raw[level] = risk.nij_eppinger_1999_level(nij, level)
         if level >= top:
             break
     return _monotone(raw)

@@ -71,12 +71,14 @@ __all__ = [
     "force_monotone",
     "hic15_ais3_ncap_2008",
     "hic_prasad_mertz_1999",
+    "hic_prasad_mertz_1999_level",
     "ncap_2008_joint_risk",
     "ncap_2008_relative_risk",
     "neck_ais3_ncap_2008",
     "neck_axial_force_ais3_ncap_2008",
     "nij_ais3_ncap_2008",
     "nij_eppinger_1999",
+    "nij_eppinger_1999_level",
     "pelvis_force_ais3_ncap_2008_es2re",
     "pelvis_force_ais3_ncap_2008_sid_iis",
     "thorax_rib_deflection_ais3_ncap_2008_es2re",
@@ -268,14 +270,37 @@ def hic_prasad_mertz_1999(hic: npt.ArrayLike) -> npt.NDArray[np.float64]:
     ndarray, shape (..., 6)
         P(AIS >= 1), ..., P(AIS >= 6).
     """
-    h = _measure(hic, "hic")[..., np.newaxis]
-    alpha = np.asarray(HIC_PRASAD_MERTZ_ALPHA)
-    beta = np.asarray(HIC_PRASAD_MERTZ_BETA)
-    positive = h > 0.0
-    safe = np.where(positive, h, 1.0)
-    p = np.asarray(expit(beta * safe - alpha - _PRASAD_MERTZ_HYPERBOLIC / safe))
-    p = np.where(positive, p, 0.0)
-    return force_monotone(p)
+    h = _measure(hic, "hic")
+    levels = range(1, len(HIC_PRASAD_MERTZ_ALPHA) + 1)
+    return force_monotone(np.stack([hic_prasad_mertz_1999_level(h, k) for k in levels], axis=-1))
+
+
+def hic_prasad_mertz_1999_level(
+    hic: npt.NDArray[np.float64], level: int
+) -> npt.NDArray[np.float64]:
+    """One level of :func:`hic_prasad_mertz_1999` before it is forced monotone.
+
+    The formula itself, for callers that evaluate some levels over many
+    values (``models.injury.batch``); the input is not checked.
+
+    Parameters
+    ----------
+    hic : ndarray, shape (...)
+        Finite, non-negative HIC values.
+    level : int
+        AIS level n, 1..6.
+
+    Returns
+    -------
+    ndarray, shape (...)
+        The published P(AIS >= n) curve.
+    """
+    alpha = HIC_PRASAD_MERTZ_ALPHA[level - 1]
+    beta = HIC_PRASAD_MERTZ_BETA[level - 1]
+    positive = hic > 0.0
+    safe = np.where(positive, hic, 1.0)
+    p = expit(beta * safe - alpha - _PRASAD_MERTZ_HYPERBOLIC / safe)
+    return np.asarray(np.where(positive, p, 0.0), dtype=np.float64)
 
 
 def hic15_ais3_ncap_2008(hic15: npt.ArrayLike) -> npt.NDArray[np.float64]:
@@ -325,9 +350,30 @@ def nij_eppinger_1999(nij: npt.ArrayLike) -> npt.NDArray[np.float64]:
     """
     x = _measure(nij, "nij")
     out = np.full(x.shape + (6,), np.nan)
-    for level, (alpha, beta) in NIJ_EPPINGER_1999.items():
-        out[..., level - 1] = _logistic(alpha, beta, x)
+    for level in NIJ_EPPINGER_1999:
+        out[..., level - 1] = nij_eppinger_1999_level(x, level)
     return force_monotone(out)
+
+
+def nij_eppinger_1999_level(nij: npt.NDArray[np.float64], level: int) -> npt.NDArray[np.float64]:
+    """One published level of :func:`nij_eppinger_1999` before it is forced monotone.
+
+    For callers that evaluate some levels over many values
+    (``models.injury.batch``); the input is not checked.
+
+    Parameters
+    ----------
+    nij : ndarray, shape (...)
+        Finite, non-negative Nij values.
+    level : int
+        AIS level n, a key of :data:`NIJ_EPPINGER_1999` (2..5).
+
+    Returns
+    -------
+    ndarray, shape (...)
+    """
+    alpha, beta = NIJ_EPPINGER_1999[level]
+    return _logistic(alpha, beta, nij)
 
 
 def nij_ais3_ncap_2008(nij: npt.ArrayLike) -> npt.NDArray[np.float64]:

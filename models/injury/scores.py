@@ -29,6 +29,7 @@ __all__ = [
     "AIS_LEVEL_THRESHOLD",
     "ISS_MAX",
     "ISS_REGIONS",
+    "ISS_TRIAGE_THRESHOLD",
     "MAX_AIS",
     "PROBABILITY_SUM_TOLERANCE",
     "ais_distribution_from_cumulative",
@@ -51,6 +52,9 @@ ISS_REGIONS: Final[tuple[str, ...]] = (
 MAX_AIS: Final[int] = 6
 #: Largest ISS, and the ISS of anyone with an AIS 6 injury. [V]
 ISS_MAX: Final[int] = 75
+#: Triage threshold of the reference paper: ISS >= 15 (Wikipedia's "major
+#: trauma" is ISS > 15; the paper triages on >= 15). [V] reference section 3.
+ISS_TRIAGE_THRESHOLD: Final[int] = 15
 #: Tolerance on the sum of a regional distribution P(AIS = 0..6).
 PROBABILITY_SUM_TOLERANCE: Final[float] = 1e-6
 #: Cumulative probability at which :func:`ais_level` assigns a level: the

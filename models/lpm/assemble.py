@@ -250,6 +250,13 @@ def _glass_to_panel(
     and the glass (a head used to pass over the panel top below ``low`` and
     leave the modelled interior). Positions in m, vehicle frame. If the lines
     do not meet below ``low``, ``low`` is kept.
+
+    Raises
+    ------
+    ValueError
+        When the glass line meets the panel's line outside the panel face
+        (the glass would be run down to a point in front of or behind the
+        panel: an inconsistent parameter set).
     """
     d0 = np.subtract(low, high)
     d1 = np.subtract(panel_b, panel_a)
@@ -260,6 +267,13 @@ def _glass_to_panel(
     t = (rhs[0] * -d1[1] + d1[0] * rhs[1]) / det
     if t <= 1.0:
         return low
+    # where on the panel face (0 at panel_a, 1 at panel_b) the lines meet
+    s = (d0[0] * rhs[1] - d0[1] * rhs[0]) / det
+    if not -1e-9 <= s <= 1.0 + 1e-9:
+        raise ValueError(
+            f"windshield line meets the panel line outside the panel face (at {s:.3f} of "
+            "its length): check frontal.windshield.* against the dash/panel geometry"
+        )
     return (float(high[0] + t * d0[0]), float(high[1] + t * d0[1]))
 
 
@@ -609,11 +623,11 @@ def _sagittal(ps: ParameterSet, occ: Occupant, rs: Restraints) -> Model:
             crush_limit=ps["frontal.knee.crush_stroke"],
         )
     )
-    # the thighs: a surface carried by the pelvis (kernel channel 4), from a
-    # quarter of the thigh length forward of the H-point to the top of the
+    # the thighs: a surface carried by the pelvis (kernel channel 4), from
+    # thigh_surface_start of the thigh length forward of the H-point to the top of the
     # knee, for the head and chest of an occupant folding over the lap belt
     tl = ps[pre + "thigh_length"]
-    thigh_a = (0.25 * tl, ps[pre + "thigh_top"])
+    thigh_a = (ps[pre + "thigh_surface_start"] * tl, ps[pre + "thigh_top"])
     thigh_b = (tl, ps[pre + "knee_height"] + knee_r)
     for name, k_body, p_body, r_body, rad in (
         ("thigh_head", *head, head_r),

@@ -28,6 +28,8 @@ MODEL_SOURCES = (
     "injury/risk.py",
     "injury/scores.py",
     "injury/assessment.py",
+    "injury/batch.py",
+    "injury/measures.py",
 )
 
 

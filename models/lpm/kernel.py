@@ -62,8 +62,10 @@ __all__ = [
     "CONTACT_FIELDS",
     "ARM_TIME_S",
     "DIAG_FIXED",
+    "GAP_NONE",
     "EDGE_RADIUS_M",
     "NQ",
+    "diag_size",
     "integrate_rk4",
     "integrate_se",
     "kin",
@@ -235,10 +237,23 @@ BAG_FIELDS = (
 )
 
 # Diagnostics row layout (fixed part); then contact forces (nc), belt forces (nb),
-# contact penetrations (nc)
+# contact penetrations (nc), contact gaps (nc: the signed clearance of the
+# contact point to the undeformed surface, m, positive apart; GAP_NONE where
+# the surface is absent or the point is behind it)
 D_HEAD_AX, D_HEAD_AZ, D_CHEST_AX, D_CHEST_AZ, D_PELV_AX = range(5)
 D_NECK_FX, D_NECK_FZ, D_NECK_MY, D_P_PULSE, D_P_ACTIVE, D_KE, D_V_INT = range(5, 12)
 DIAG_FIXED = 12
+
+#: Gap recorded for a contact whose surface is not there (disabled, bag not
+#: out) or that the point passes behind (disarmed), m: farther than any
+#: interior distance of the models.
+GAP_NONE = 1.0
+
+
+@njit(cache=True)
+def diag_size(nc: int, nb: int) -> int:
+    """Columns of a diagnostics row for `nc` contacts and `nb` belts."""
+    return DIAG_FIXED + 3 * nc + nb
 
 
 @njit(cache=True, error_model="numpy")
@@ -418,6 +433,16 @@ def _bag_state(t: float, bag: np.ndarray) -> tuple[float, float, float, float, f
 
 
 @njit(cache=True, inline="always", error_model="numpy")
+def _still_crushing(ct: np.ndarray, crush: float) -> bool:
+    """Whether a crushable contact (row `ct`) has stroke left at `crush` (m).
+
+    A structure crushed to its stroke limit (``C_CLIM``, none when <= 0) is a
+    stop: the next, stiffer structure behind it acts through the bottoming spring.
+    """
+    return bool(ct[C_CLIM] <= 0.0 or crush < ct[C_CLIM])
+
+
+@njit(cache=True, inline="always", error_model="numpy")
 def _contact_force(
     pen: float,
     pendot: float,
@@ -476,7 +501,7 @@ def _contact_force(
         bcap = ct[C_BCAP]
         # until its stroke (C_CLIM) is used up: then the next, stiffer structure
         # (firewall, cross-car beam) stops it through the bottoming spring
-        if bcap > 0.0 and f > bcap and (ct[C_CLIM] <= 0.0 or crush < ct[C_CLIM]):
+        if bcap > 0.0 and f > bcap and _still_crushing(ct, crush):
             rate = (f - bcap) / ct[C_CCR]
             f = bcap
             if fe > bcap:
@@ -541,7 +566,7 @@ def rhs(
         Vehicle acceleration on the model axis, m/s^2.
     door_s, door_v : ndarray, shape (n,)
         Prescribed surface motion channel 1 (door intrusion), m and m/s.
-    diag : ndarray, shape (DIAG_FIXED + 2 nc + nb,) or (0,)
+    diag : ndarray, shape (DIAG_FIXED + 3 nc + nb,) or (0,)
         Output diagnostics when non-empty.
 
     Returns
@@ -593,7 +618,7 @@ def rhs_into(
         Vehicle acceleration on the model axis, m/s^2.
     door_s, door_v : ndarray, shape (n,)
         Prescribed surface motion channel 1 (door intrusion), m and m/s.
-    diag : ndarray, shape (DIAG_FIXED + 2 nc + nb,) or (0,)
+    diag : ndarray, shape (DIAG_FIXED + 3 nc + nb,) or (0,)
         Output diagnostics when non-empty.
 
     Returns
@@ -698,6 +723,7 @@ def rhs_into(
             if want:
                 diag[DIAG_FIXED + c] = 0.0
                 diag[DIAG_FIXED + nc + nb + c] = 0.0
+                diag[DIAG_FIXED + 2 * nc + nb + c] = GAP_NONE
             continue
         k = int(row[C_KB])
         beta = row[C_SHARE] if row[C_SHARE] >= 0.0 else ch[5]
@@ -738,6 +764,7 @@ def rhs_into(
                 if want:
                     diag[DIAG_FIXED + c] = 0.0
                     diag[DIAG_FIXED + nc + nb + c] = 0.0
+                    diag[DIAG_FIXED + 2 * nc + nb + c] = GAP_NONE
                 continue
         ax = row[C_AX] + row[C_MX] * sv + row[C_NX] * bag_d
         az = row[C_AZ] + row[C_MZ] * sv + row[C_NZ] * bag_d
@@ -779,15 +806,20 @@ def rhs_into(
         # back into its span from behind is not in contact with it (the depth
         # test cannot be reached from the front: there the crush follows the
         # penetration within (F - bottom_cap)/c of travel)
+        arm = y[2 * NQ + 2 * nb + nc + c]
+        if want:
+            # geometric clearance to the undeformed surface, before the
+            # crush-depth test below can mark the point as gone around
+            diag[DIAG_FIXED + 2 * nc + nb + c] = -pen if pen <= 0.0 or arm >= 0.5 else GAP_NONE
         if row[C_BCAP] > 0.0:
             crush = y[2 * NQ + 2 * nb + c]
-            crushing = row[C_CLIM] <= 0.0 or crush < row[C_CLIM]
             # (a structure crushed to its stroke limit is a stop, not passed)
-            if crushing and pen - row[C_GIVE] - crush > 2.0 * row[C_BCAP] / row[C_KBOT]:
+            if _still_crushing(row, crush) and (
+                pen - row[C_GIVE] - crush > 2.0 * row[C_BCAP] / row[C_KBOT]
+            ):
                 pen = -1.0
                 around = True
         ia = 2 * NQ + 2 * nb + nc + c
-        arm = y[ia]
         if pen <= 0.0:
             # out of contact: arm in front of the surface, disarm behind it
             dy[ia] = ((0.0 if around else 1.0) - arm) / ARM_TIME_S
@@ -980,14 +1012,14 @@ def integrate_rk4(
     -------
     ys : ndarray, shape (n, len(y0))
         State at t = i dt.
-    diags : ndarray, shape (n, DIAG_FIXED + 2 nc + nb)
+    diags : ndarray, shape (n, DIAG_FIXED + 3 nc + nb)
         Diagnostics at the same times (from the first stage of each step).
     status : int
         0 success, -1 non-finite state (integration stopped).
     """
     n = int(round(t_end / dt)) + 1
     ny = y0.shape[0]
-    nd = DIAG_FIXED + 2 * ct.shape[0] + bt.shape[0]
+    nd = diag_size(ct.shape[0], bt.shape[0])
     ys = np.zeros((n, ny))
     diags = np.zeros((n, nd))
     empty = np.zeros(0)
@@ -1127,7 +1159,7 @@ def integrate_se(
     """
     n = int(round(t_end / dt)) + 1
     ny = y0.shape[0]
-    nd = DIAG_FIXED + 2 * ct.shape[0] + bt.shape[0]
+    nd = diag_size(ct.shape[0], bt.shape[0])
     ys = np.zeros((n, ny))
     diags = np.zeros((n, nd))
     ws = np.zeros((NQ + 14, NQ))

@@ -27,7 +27,7 @@ import os
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from types import MappingProxyType
-from typing import Any
+from typing import Any, Final
 
 import numpy as np
 import numpy.typing as npt
@@ -56,6 +56,7 @@ from models.lpm.params import ParameterSet
 from models.notification import AirbagState, Body, Occupant
 
 __all__ = [
+    "HEAD_STRIKE_CONTACTS",
     "STATUS_MESSAGES",
     "BatchCase",
     "LpmResult",
@@ -64,6 +65,7 @@ __all__ = [
     "simulate",
     "simulate_batch",
     "simulate_reference",
+    "head_clearance_mm",
     "warm_up",
 ]
 
@@ -116,6 +118,46 @@ class LpmResult:
     status: int
     message: str
     info: Mapping[str, Any]
+
+
+#: Contacts of the head with the rigid interior (not airbags, not the
+#: occupant's own thighs): frontal steering wheel, windshield and its lower
+#: panel, dash; near side door window; far side far door. [R] Where the head
+#: first meets one of them HIC15 and Nij change slope (a hinge in every input;
+#: REPORT.md of the surrogates, models/surrogate/spec.py), so the surrogates
+#: are fitted on each side of that onset.
+HEAD_STRIKE_CONTACTS: Final[tuple[str, ...]] = (
+    "wheel_head",
+    "windshield_head",
+    "dash_head",
+    "window_head",
+    "far_door_head",
+)
+
+
+def head_clearance_mm(result: LpmResult) -> float:
+    """Least clearance of the head to the rigid interior over the run, mm.
+
+    The minimum over time and over the model's :data:`HEAD_STRIKE_CONTACTS` of
+    the signed gap of the head's contact point to the undeformed surface
+    (``gap_<contact>_m`` histories): positive when the head never reached a
+    surface (the margin left), negative the deepest penetration. Continuous
+    through the onset of a head strike, unlike the measures' slopes.
+
+    Returns
+    -------
+    float
+        mm; NaN for a failed run; :data:`models.lpm.kernel.GAP_NONE` (in mm)
+        when the model has none of those contacts.
+    """
+    if result.status < 0:
+        return float("nan")
+    gaps = [
+        float(np.min(result.histories[f"gap_{c}_m"]))
+        for c in HEAD_STRIKE_CONTACTS
+        if f"gap_{c}_m" in result.histories
+    ]
+    return 1000.0 * (min(gaps) if gaps else K.GAP_NONE)
 
 
 @dataclass(frozen=True)
@@ -414,6 +456,7 @@ def _histories(
     for c, name in enumerate(m.contact_names):
         h[f"force_{name}_n"] = diags[:, K.DIAG_FIXED + c]
         h[f"penetration_{name}_m"] = diags[:, K.DIAG_FIXED + nc + nb + c]
+        h[f"gap_{name}_m"] = diags[:, K.DIAG_FIXED + 2 * nc + nb + c]
         if m.ct[c, K.C_BCAP] > 0.0:
             h[f"crush_{name}_m"] = ys[:, 2 * K.NQ + 2 * nb + c]
     for b, name in enumerate(m.belt_names):
@@ -686,7 +729,7 @@ def simulate_reference(
     sol = solve_ivp(fun, (0.0, t[-1]), m.y0, method=method, t_eval=t, rtol=rtol, atol=atol)
     if not sol.success or sol.y.shape[1] != n:
         empty_h = np.zeros((1, m.y0.size))
-        nd = K.DIAG_FIXED + 2 * m.ct.shape[0] + m.bt.shape[0]
+        nd = K.diag_size(m.ct.shape[0], m.bt.shape[0])
         res = _result(pr, angle_deg, t[:1], empty_h, np.zeros((1, nd)), -1)
         return LpmResult(
             res.mode,
@@ -700,7 +743,7 @@ def simulate_reference(
             res.info,
         )
     ys = np.ascontiguousarray(sol.y.T)
-    nd = K.DIAG_FIXED + 2 * m.ct.shape[0] + m.bt.shape[0]
+    nd = K.diag_size(m.ct.shape[0], m.bt.shape[0])
     diags = np.zeros((n, nd))
     for i in range(n):
         K.rhs(float(t[i]), ys[i], *args, diags[i])

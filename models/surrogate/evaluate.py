@@ -12,6 +12,10 @@ Propagation (reference paper section 2.5; issue 5)
   :data:`N_SENSOR_SAMPLES` standard-normal pairs (a Fibonacci lattice through
   the Box-Muller map: deterministic, low discrepancy) is used, so the same
   call always gives bit-identical output.
+* A delta-V piece in which the head strikes the rigid interior in part of
+  the design holds two sets of PCEs, one per side of the strike onset, and a
+  gate PCE of the head's least clearance (mm) that picks the side at every
+  point, blended over a few millimetres (:class:`_SplitPiece`).
 * Delta-V, |angle from the mode axis| and pulse duration are taken as given
   (clamped to the design ranges; :attr:`UncertaintyResult.clamped_inputs`).
 * P(ISS >= 15) is not read from its own PCE: at every sensor sample of every
@@ -62,6 +66,7 @@ from models.surrogate.basis import design_matrix, evaluate_univariate
 from models.surrogate.spec import (
     AIRBAG_MODES,
     FAMILIES,
+    HEAD_CLEARANCE,
     INPUT_NAMES,
     family_name,
     from_output_scale,
@@ -92,8 +97,9 @@ IntArray = npt.NDArray[np.int64]
 EVALUATION_NAME: Final[str] = "PCE sensor-uncertainty propagation and interval calibration"
 #: 1: bootstrap percentiles, P(ISS >= 15) interval widened by the held-out factor;
 #: 2: the measure and ISS intervals extended by their held-out calibrated margins;
-#: 3: P(ISS >= 15) from the surrogate measures through the risk curves (age-aware).
-EVALUATION_VERSION: Final[str] = "3"
+#: 3: P(ISS >= 15) from the surrogate measures through the risk curves (age-aware);
+#: 4: delta-V pieces split at the head-strike onset, chosen by a gate PCE (format 4).
+EVALUATION_VERSION: Final[str] = "4"
 
 
 #: Sources of the evaluation (this module and the batch risk it calls).
@@ -350,6 +356,119 @@ class _Piece:
         return (psi2 @ c2).T.reshape(len(self.outputs), self._nb1, -1)
 
 
+class _SplitPiece:
+    """A delta-V piece fitted on each side of the head-strike onset (immutable).
+
+    A gate PCE of the head's least clearance to the rigid interior
+    (:data:`models.surrogate.spec.HEAD_CLEARANCE`, mm) decides, at each input
+    point, which side's PCEs apply: the struck side's below ``-band``, the
+    free side's above ``+band``, a smoothstep blend in between (so the
+    surrogate is continuous across the onset). The point gate PCE decides for
+    the replicates too: the bootstrap measures each side's fit, not the gate's.
+    Same interface as :class:`_Piece`.
+    """
+
+    __slots__ = ("_band", "_contact", "_free", "_gate", "outputs")
+
+    outputs: tuple[str, ...]
+    _band: float
+    _contact: _Piece
+    _free: _Piece
+    _gate: _Piece
+
+    def __setattr__(self, key: str, value: object) -> None:
+        raise AttributeError(f"surrogate pieces are immutable ({key})")
+
+    def __init__(
+        self,
+        arrays: Mapping[str, npt.NDArray[Any]],
+        outputs: tuple[str, ...],
+        prefix: str,
+        band_mm: float,
+    ) -> None:
+        if not band_mm > 0.0:
+            raise ValueError(f"{prefix}: split band must be > 0 mm")
+        gate = _Piece(arrays, (HEAD_CLEARANCE,), prefix + "gate/")
+        contact = _Piece(arrays, outputs, prefix + "contact/")
+        free = _Piece(arrays, outputs, prefix + "free/")
+        if not (gate.n_bootstrap == contact.n_bootstrap == free.n_bootstrap):
+            raise ValueError(f"{prefix}: sides differ in bootstrap size")
+        if not (gate.delta_v_design == contact.delta_v_design == free.delta_v_design):
+            raise ValueError(f"{prefix}: sides differ in design range")
+        sa = object.__setattr__
+        sa(self, "outputs", outputs)
+        sa(self, "_band", float(band_mm))
+        sa(self, "_gate", gate)
+        sa(self, "_contact", contact)
+        sa(self, "_free", free)
+
+    @property
+    def n_bootstrap(self) -> int:
+        return self._contact.n_bootstrap
+
+    @property
+    def delta_v_design(self) -> tuple[float, float]:
+        """Delta-V design range of the piece, km/h."""
+        return self._contact.delta_v_design
+
+    def struck_weight(self, clearance_mm: FloatArray) -> FloatArray:
+        """Weight of the struck side at gate clearances (mm): 1 below -band, 0 above +band."""
+        u = np.clip((self._band - clearance_mm) / (2.0 * self._band), 0.0, 1.0)
+        return np.asarray(u * u * (3.0 - 2.0 * u), dtype=np.float64)
+
+    def clearance(self, x: FloatArray) -> FloatArray:
+        """Point gate PCE at raw inputs: predicted head clearance, mm, shape (n,)."""
+        return np.asarray(self._gate.predict_raw(x, 0)[:, 0], dtype=np.float64)
+
+    def predict_raw(self, x: FloatArray, replicate: int) -> FloatArray:
+        """Fitted-scale outputs at raw inputs, shape (n, n_out)."""
+        wc = self.struck_weight(self.clearance(x))
+        out = np.zeros((x.shape[0], len(self.outputs)))
+        for side, w in ((self._contact, wc), (self._free, 1.0 - wc)):
+            rows = w > 0.0
+            if np.any(rows):
+                out[rows] += w[rows, None] * side.predict_raw(x[rows], replicate)
+        return out
+
+    def predict_raw_all(self, x: FloatArray) -> FloatArray:
+        """Fitted-scale outputs, point PCE and replicates, shape (n, n_out, B + 1)."""
+        wc = self.struck_weight(self.clearance(x))
+        out = np.zeros((x.shape[0], len(self.outputs), self.n_bootstrap + 1))
+        for side, w in ((self._contact, wc), (self._free, 1.0 - wc)):
+            rows = w > 0.0
+            if np.any(rows):
+                out[rows] += w[rows, None, None] * side.predict_raw_all(x[rows])
+        return out
+
+    def samples(self, xc: FloatArray, post: FloatArray, seat: FloatArray) -> FloatArray:
+        """Fitted-scale outputs, shape (n_out, B + 1, n) at fixed inputs and sensor samples."""
+        gate = self._gate.samples(xc, post, seat)[0, 0]  # point gate PCE, (n,)
+        wc = self.struck_weight(gate)
+        out = np.zeros((len(self.outputs), self.n_bootstrap + 1, post.size))
+        for side, w in ((self._contact, wc), (self._free, 1.0 - wc)):
+            cols = np.flatnonzero(w > 0.0)
+            if cols.size == post.size:
+                out += w * side.samples(xc, post, seat)
+            elif cols.size:
+                out[:, :, cols] += w[cols] * side.samples(xc, post[cols], seat[cols])
+        return out
+
+
+def _piece(
+    arrays: Mapping[str, npt.NDArray[Any]],
+    outputs: tuple[str, ...],
+    prefix: str,
+    piece_meta: Mapping[str, Any],
+) -> _Piece | _SplitPiece:
+    """The piece at `prefix`: split at the head-strike onset when its metadata says so."""
+    split = piece_meta.get("split")
+    if split is None:
+        return _Piece(arrays, outputs, prefix)
+    if split.get("gate") != HEAD_CLEARANCE:
+        raise ValueError(f"{prefix}: unknown split gate {split.get('gate')!r}")
+    return _SplitPiece(arrays, outputs, prefix, float(split["band_mm"]))
+
+
 class SurrogateFamily:
     """PCE surrogates of one mode x body x restraint family (immutable).
 
@@ -402,7 +521,7 @@ class SurrogateFamily:
     _meas_rows: IntArray
     _measures: tuple[str, ...]
     _mode: ImpactMode
-    _pieces: tuple[_Piece, ...]
+    _pieces: tuple[_Piece | _SplitPiece, ...]
 
     def __setattr__(self, key: str, value: object) -> None:
         raise AttributeError(f"SurrogateFamily is immutable ({key})")
@@ -425,7 +544,10 @@ class SurrogateFamily:
             edges = np.asarray(meta["delta_v_pieces_kmh"], dtype=np.float64)
             body, mode = Body(meta["body"]), ImpactMode(meta["mode"])
             fitted = tuple(o for o in outputs if o != "p_iss15")
-            pieces = tuple(_Piece(arrays, fitted, f"piece{k}/") for k in range(edges.size - 1))
+            pieces = tuple(
+                _piece(arrays, fitted, f"piece{k}/", meta["pieces"][k])
+                for k in range(edges.size - 1)
+            )
         except KeyError as exc:
             raise ValueError(f"{meta.get('family', '?')}: member {exc} missing") from exc
         if "p_iss15" not in outputs:
@@ -637,6 +759,31 @@ class SurrogateFamily:
             others[[j - 1, j]] = False
             w[np.ix_(zone, others)] = 0.0
         return w
+
+    def head_clearance(self, x: npt.ArrayLike) -> FloatArray:
+        """The gate PCE of a split piece at raw inputs: predicted head clearance, mm.
+
+        Parameters
+        ----------
+        x : array_like, shape (n, 5)
+            Columns of :data:`INPUT_NAMES`; each point is given to the piece whose
+            delta-V interval holds it (no blending).
+
+        Returns
+        -------
+        ndarray, shape (n,)
+            mm; NaN where that piece is not split.
+        """
+        xv = np.array(np.atleast_2d(np.asarray(x, dtype=np.float64)))
+        xv[:, 1] = np.abs(xv[:, 1])
+        n_p = len(self._pieces)
+        k = np.clip(np.searchsorted(self._edges, xv[:, 0], side="right") - 1, 0, n_p - 1)
+        out = np.full(xv.shape[0], np.nan)
+        for i, piece in enumerate(self._pieces):
+            rows = k == i
+            if isinstance(piece, _SplitPiece) and np.any(rows):
+                out[rows] = piece.clearance(xv[rows])
+        return out
 
     def predict(
         self, x: npt.ArrayLike, replicate: int = 0, age_years: float | None = None

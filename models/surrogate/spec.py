@@ -52,6 +52,7 @@ __all__ = [
     "P_RESOLUTION",
     "MEASURE_FLOORS",
     "FamilySpec",
+    "HEAD_CLEARANCE",
     "MODE_OUTPUTS",
     "family_name",
     "from_output_scale",
@@ -131,9 +132,9 @@ INPUT_NAMES: Final[tuple[str, ...]] = (
 #: the wheel, then rising linearly (e.g. 33 -> 136 over +3 km/h). The PCE rounds
 #: the hinge and puts the flat side at about twice the LPM value (33 vs 83),
 #: so the median relative error is made by HIC15 values of 30-150, below every
-#: injury threshold. A likely remedy, not built: split each piece's domain by
-#: a signed head-clearance output of the LPM (smooth through the onset) and
-#: fit each side with its own PCE. Measured offline the same day (one piece,
+#: injury threshold. The remedy (built 2026-12-02, see below): split each
+#: piece's domain by a signed head-clearance output of the LPM (smooth
+#: through the onset) and fit each side with its own PCE. Measured offline the same day (one piece,
 #: 600 LHS runs, 300 uniform test runs, the build's aPCE/LAR fit; clearance =
 #: the least signed distance over time of the head to the wheel, glass and
 #: panel, fitted by its own PCE, whose sign matched the LPM's on 94-97 % of
@@ -159,6 +160,9 @@ INPUT_NAMES: Final[tuple[str, ...]] = (
 #: 2750 -> 53 over 40-150 ms of pulse duration at 78 km/h. Splitting that
 #: piece at 77.5 ms of duration as well (600 runs each side): HIC15 13.9 ->
 #: 13.1 %, Nij 15.5 -> 13.3 % on its 78 held-out points, no remedy either.
+#: The head-clearance split is built since 2026-12-02 in every piece where
+#: both sides hold enough runs (models.surrogate.build.BuildConfig
+#: split_min_side_runs, split_band_mm); REPORT.md Table E lists them.
 DELTA_V_PIECES_KMH: Final[tuple[float, ...]] = (5.0, 20.0, 40.0, 70.0, 120.0)
 
 #: Each piece's design extends beyond its interval by this fraction of its
@@ -265,6 +269,13 @@ LOGIT_CLIP: Final[float] = 1e-3
 #: Resolution of the surrogate's P(ISS >= 15) near 0 and 1.
 P_RESOLUTION: Final[float] = 2.0 * LOGIT_CLIP
 
+#: The gate output of a split delta-V piece: the head's least clearance to the
+#: rigid interior over the run, mm (models.lpm.simulate.head_clearance_mm),
+#: fitted on its own (identity) scale. Pieces where the head strikes the
+#: interior in part of the design are fitted on each side of the strike onset
+#: (models.surrogate.build, :data:`DELTA_V_PIECES_KMH` for the measurements).
+HEAD_CLEARANCE: Final[str] = "head_clearance_mm"
+
 #: Largest ISS (AIS 5 in three regions, or any AIS 6).
 ISS_MAX: Final[float] = 75.0
 
@@ -275,7 +286,7 @@ def to_output_scale(name: str, value: npt.ArrayLike) -> FloatArray:
     if name == "p_iss15":
         p = np.clip(v, LOGIT_CLIP, 1.0 - LOGIT_CLIP)
         return np.asarray(np.log(p / (1.0 - p)), dtype=np.float64)
-    if name == "iss":
+    if name in ("iss", HEAD_CLEARANCE):
         return v
     floor = MEASURE_FLOORS[name]
     return np.asarray(np.log(np.maximum(v, 0.0) + floor), dtype=np.float64)
@@ -291,6 +302,8 @@ def from_output_scale(name: str, value: npt.ArrayLike) -> FloatArray:
         return np.asarray(p, dtype=np.float64)
     if name == "iss":
         return np.clip(v, 0.0, ISS_MAX)
+    if name == HEAD_CLEARANCE:
+        return v
     floor = MEASURE_FLOORS[name]
     return np.asarray(np.maximum(np.exp(np.minimum(v, 50.0)) - floor, 0.0), dtype=np.float64)
 

@@ -43,6 +43,10 @@ def test_zero_pulse_gives_zero_response(
     for name, h in r.histories.items():
         if name.endswith(("_x_m", "_z_m", "_angle_rad")):
             assert np.all(h == h[0]), name  # positions stay exactly where they started
+        elif name.startswith("gap_"):
+            assert np.all(h > 0.0), name  # nothing touches
+            if "airbag" not in name:  # only a bag's surface moves (it deploys)
+                assert np.all(h == h[0]), name
         else:
             assert np.all(h == 0.0), name
     assert r.measures.hic15 == 0.0
@@ -333,3 +337,44 @@ def test_frontal_rebound_and_seat_loads_stay_physical(params: ParameterSet, body
                     if seat > 10e3:
                         bad.append(f"{label}: seat {seat:.0f} N")
     assert bad == []
+
+
+def test_head_clearance_is_the_signed_gap_to_the_interior(params: ParameterSet) -> None:
+    """The gap histories are the penetrations with the sign turned where a contact
+    is made, the clearance is positive when the head stays clear and negative
+    (the deepest penetration) when it strikes, and it moves continuously with
+    delta-V through the strike onset."""
+    from models.lpm.simulate import HEAD_STRIKE_CONTACTS, head_clearance_mm
+
+    occ = occupant(Body.MALE_50TH, belted=True, airbag=False)
+    clearances = []
+    for dv in (20.0, 30.0, 40.0, 45.0, 50.0, 60.0):
+        t, ax, ay = haversine_pulse(dv, 0.09)
+        r = simulate(t, ax, ay, ImpactMode.FRONTAL, occ, params)
+        assert r.status >= 0
+        for c in HEAD_STRIKE_CONTACTS:
+            if f"gap_{c}_m" not in r.histories:
+                continue
+            gap, pen = r.histories[f"gap_{c}_m"], r.histories[f"penetration_{c}_m"]
+            touching = pen > 0.0
+            np.testing.assert_array_equal(gap[touching], -pen[touching])
+        clearances.append(head_clearance_mm(r))
+        if dv == 20.0:
+            assert clearances[-1] > 50.0  # a belted 50M stays well clear of the wheel
+            assert r.measures.hic15 < 100.0
+    assert clearances[-1] < 0.0  # and strikes it at 60 km/h (HIC15 above 500)
+    assert np.all(np.diff(clearances) < 0.0)  # less margin at every step up in delta-V
+    assert np.max(np.abs(np.diff(clearances))) < 100.0  # no jump at the onset
+    assert np.isnan(head_clearance_mm(dataclasses.replace(r, status=-1)))
+
+
+def test_glass_run_down_outside_the_panel_is_rejected() -> None:
+    from models.lpm.assemble import _glass_to_panel
+
+    # a vertical glass line through x = 0 meets a panel line z = 0 on its face ...
+    assert _glass_to_panel((0.0, 0.5), (0.0, 1.0), (-1.0, 0.0), (1.0, 0.0)) == (0.0, 0.0)
+    # ... or beyond the end of a panel that only spans x in [0.5, 1]: inconsistent geometry
+    with pytest.raises(ValueError, match="outside the panel face"):
+        _glass_to_panel((0.0, 0.5), (0.0, 1.0), (0.5, 0.0), (1.0, 0.0))
+    # a glass point already below the panel line is kept
+    assert _glass_to_panel((0.0, -0.1), (0.0, 1.0), (0.5, 0.0), (1.0, 0.0)) == (0.0, -0.1)

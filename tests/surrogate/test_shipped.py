@@ -87,8 +87,10 @@ def test_shipped_heldout_agreement_at_the_service_decision() -> None:
 
 @pytest.mark.xfail(
     strict=True,
-    reason="open item: per family, the unbelted 50M with airbag and the belted 5F without, both"
-    " frontal, stay at 96.7 % (5 of 150 held-out points; REPORT.md Table B)",
+    reason="open item: per family, the frontal belted 5F without airbag stays at 96.0 % (6 of"
+    " 150 held-out points, all at 66-115 km/h, where her head strikes the wheel in almost every"
+    " run and the hinges are other contacts; REPORT.md Table B); every other family is at"
+    " 98.7 % or more since the head-strike split",
 )
 def test_shipped_heldout_agreement_target_per_family() -> None:
     import numpy as np
@@ -229,3 +231,43 @@ def test_served_p_is_the_assessment_of_the_served_measures_at_the_occupant_age()
         by_age[age] = r.p_iss15
     assert by_age[80.0] > by_age[25.0]
     assert 0.01 < by_age[None] < 0.99, "the check is made where P is not saturated"
+
+
+def test_shipped_head_strike_gates_sort_the_held_out_runs() -> None:
+    """Pieces where the head strikes the interior in part of the design are split,
+    and the gate PCEs put the held-out LPM runs on the side the LPM itself reached
+    (the sign of the head clearance): 95 % of 879 runs in 22 pieces as built
+    2026-12-02, at least 86 % in each piece (10-70 runs per piece; the misses
+    lie near zero clearance, where the two sides meet)."""
+    import numpy as np
+
+    from models.surrogate.evaluate import default_artifact_dir
+    from models.surrogate.store import read_artifact
+
+    lib = SurrogateLibrary.load()
+    n_split = 0
+    pooled: list[bool] = []
+    for name, fam in lib.families().items():
+        splits = [p for p in fam.meta["pieces"] if "split" in p]
+        if not splits:
+            continue
+        n_split += len(splits)
+        arrays, _ = read_artifact(default_artifact_dir() / f"{name}.npz")
+        x, c = arrays["heldout_x"], arrays["heldout_head_clearance_mm"]
+        gate = fam.head_clearance(x)
+        for p in splits:
+            lo, hi = p["delta_v_kmh"]
+            inside = (x[:, 0] >= lo) & (x[:, 0] < hi) & np.isfinite(c)
+            if inside.sum() < 10:
+                continue
+            hits = (gate[inside] < 0.0) == (c[inside] < 0.0)
+            pooled += list(hits)
+            assert np.mean(hits) >= 0.8, (name, lo, hi, np.mean(hits))
+        # and pieces that are not split hold the same gate value: none
+        unsplit = [p for p in fam.meta["pieces"] if "split" not in p]
+        for p in unsplit:
+            lo, hi = p["delta_v_kmh"]
+            inside = (x[:, 0] >= lo) & (x[:, 0] < hi)
+            assert np.all(np.isnan(gate[inside]))
+    assert n_split >= 4  # the frontal head strikes of both bodies, at least
+    assert np.mean(pooled) >= 0.93, np.mean(pooled)
