@@ -111,8 +111,8 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
             "sha256": "beda62d71092da52792889befdefb6f8520251535307b3f4bdf475b9c861bd6e",
         },
         "surrogate_evaluation": {
-            "version": "4",
-            "sha256": "fc63c84be8860491ab0892cf435b3a12738cfa368abf47e17c1d3ea819976234",
+            "version": "5",
+            "sha256": "e9a003eb94852204216bdd4f590f72c3cdd523f34409628b2398018047dea1ea",
         },
         "triage_code": {
             "version": "0.2.0",

@@ -2,7 +2,7 @@
 
 :meth:`SurrogateLibrary.load` reads and verifies the artifacts once;
 :meth:`SurrogateFamily.propagate` turns the occupant sensor uncertainty into
-95% intervals in about a millisecond, with all bootstrap replicates.
+95% intervals in a few milliseconds, with all bootstrap replicates.
 
 Propagation (reference paper section 2.5; issue 5)
 ----------------------------------------------------
@@ -57,6 +57,7 @@ from typing import Any, Final
 
 import numpy as np
 import numpy.typing as npt
+from scipy.sparse import csr_array
 
 import models.injury.batch as _batch_module
 from models.impact_mode import ImpactMode
@@ -98,8 +99,11 @@ EVALUATION_NAME: Final[str] = "PCE sensor-uncertainty propagation and interval c
 #: 1: bootstrap percentiles, P(ISS >= 15) interval widened by the held-out factor;
 #: 2: the measure and ISS intervals extended by their held-out calibrated margins;
 #: 3: P(ISS >= 15) from the surrogate measures through the risk curves (age-aware);
-#: 4: delta-V pieces split at the head-strike onset, chosen by a gate PCE (format 4).
-EVALUATION_VERSION: Final[str] = "4"
+#: 4: delta-V pieces split at the head-strike onset, chosen by a gate PCE (format 4);
+#: 5: the sensor-sample sums by a sparse product and one sensor basis per split
+#: piece (summation order only: served values within 4e-12 relative of version
+#: 4 at 480 random readings over the 24 families).
+EVALUATION_VERSION: Final[str] = "5"
 
 
 #: Sources of the evaluation (this module and the batch risk it calls).
@@ -221,12 +225,22 @@ class UncertaintyResult:
     p_interval_inflation: float = 1.0
 
 
+#: Inputs fixed over the sensor samples (delta-V, angle, duration), columns of INPUT_NAMES.
+_FIXED_INPUTS: Final[tuple[int, int, int]] = (0, 1, 4)
+
+#: :meth:`_Piece.sensor_basis`: univariate polynomials of the fixed inputs, each
+#: shape (max degree + 1,), then of the posture and seat track samples, each
+#: shape (n, max degree + 1).
+_SensorBasis = tuple[tuple[FloatArray, ...], FloatArray, FloatArray]
+
+
 class _Piece:
     """Point and bootstrap PCEs of every output on one delta-V piece (immutable)."""
 
     __slots__ = (
-        "_agg_starts",
         "_coef_t",
+        "_group_ptr",
+        "_group_shape",
         "_hi",
         "_lo",
         "_maxdeg",
@@ -234,13 +248,17 @@ class _Piece:
         "_pairs",
         "_ranges",
         "_recs",
+        "_term_index",
         "_terms",
         "outputs",
     )
 
     outputs: tuple[str, ...]
-    _agg_starts: IntArray
     _coef_t: FloatArray
+    #: CSR row pointers of the (posture, seat track) groups over the sorted terms
+    _group_ptr: IntArray
+    _group_shape: tuple[int, int]
+    _term_index: IntArray
     _nb1: int
     _hi: FloatArray
     _lo: FloatArray
@@ -312,8 +330,15 @@ class _Piece:
         sa(self, "_maxdeg", int(cand.max()))
         sa(self, "_terms", terms)
         sa(self, "_coef_t", coef_t)
-        sa(self, "_agg_starts", starts)
         sa(self, "_pairs", pairs)
+        n_terms = int(terms.shape[0])
+        term_index = np.arange(n_terms, dtype=np.int64)
+        group_ptr = np.append(starts, n_terms).astype(np.int64)
+        for arr in (term_index, group_ptr):
+            arr.flags.writeable = False
+        sa(self, "_term_index", term_index)
+        sa(self, "_group_ptr", group_ptr)
+        sa(self, "_group_shape", (int(starts.size), n_terms))
 
     @property
     def n_bootstrap(self) -> int:
@@ -339,20 +364,62 @@ class _Piece:
         """Delta-V design range of the piece, km/h."""
         return self._ranges[0]
 
-    def samples(self, xc: FloatArray, post: FloatArray, seat: FloatArray) -> FloatArray:
-        """Fitted-scale outputs, shape (n_out, B + 1, n) at fixed inputs and sensor samples."""
+    def sensor_basis(self, xc: FloatArray, post: FloatArray, seat: FloatArray) -> _SensorBasis:
+        """Univariate polynomials of :meth:`samples`: the fixed inputs and the sensor samples.
+
+        Parameters
+        ----------
+        xc : ndarray, shape (1, 5)
+            Raw inputs (clamped to the domain).
+        post, seat : ndarray, shape (n,)
+            Posture (deg) and seat track (mm) samples.
+        """
         z = to_unit(xc, self._ranges)[0]
         md = self._maxdeg
-        s = np.ones(self._terms.shape[0])
-        for j in (0, 1, 4):  # delta-V, angle, duration: one scalar factor per term
-            uni = evaluate_univariate(z[j : j + 1], self._recs[j], md)[0]
-            s *= uni[self._terms[:, j]]
+        fixed = tuple(
+            evaluate_univariate(z[j : j + 1], self._recs[j], md)[0] for j in _FIXED_INPUTS
+        )
         zp = 2.0 * (post - self._lo[_POSTURE]) / (self._hi[_POSTURE] - self._lo[_POSTURE]) - 1.0
         zs = 2.0 * (seat - self._lo[_SEAT]) / (self._hi[_SEAT] - self._lo[_SEAT]) - 1.0
         up = evaluate_univariate(zp, self._recs[_POSTURE], md)
         us = evaluate_univariate(zs, self._recs[_SEAT], md)
+        return fixed, up, us
+
+    def same_basis(self, other: _Piece) -> bool:
+        """Whether `other` has the same input ranges and recurrences (sensor bases shareable)."""
+        return (
+            self._ranges == other._ranges
+            and self._maxdeg == other._maxdeg
+            and all(
+                np.array_equal(a[0], b[0]) and np.array_equal(a[1], b[1])
+                for a, b in zip(self._recs, other._recs, strict=True)
+            )
+        )
+
+    def samples(
+        self,
+        xc: FloatArray,
+        post: FloatArray,
+        seat: FloatArray,
+        basis: _SensorBasis | None = None,
+    ) -> FloatArray:
+        """Fitted-scale outputs, shape (n_out, B + 1, n) at fixed inputs and sensor samples.
+
+        `basis`, when given, is :meth:`sensor_basis` at the same points (of this
+        piece or of one with the :meth:`same_basis`).
+        """
+        fixed, up, us = self.sensor_basis(xc, post, seat) if basis is None else basis
+        s = np.ones(self._terms.shape[0])
+        for j, uni in zip(_FIXED_INPUTS, fixed, strict=True):  # one scalar factor per term
+            s *= uni[self._terms[:, j]]
         psi2 = np.take(up, self._pairs[:, 0], axis=1) * np.take(us, self._pairs[:, 1], axis=1)
-        c2 = np.add.reduceat(self._coef_t * s[:, None], self._agg_starts, axis=0)  # (M, O(B+1))
+        # per (posture, seat track) group the coefficients weighted by the term's
+        # other factor: a sparse (M, terms) matrix with one entry per term, times
+        # the coefficients, (M, O(B+1)). [R] scipy's CSR product: 0.13 ms against
+        # 0.95 ms for a multiply and np.add.reduceat on a 446 x 1208 block (one
+        # pass, no temporary), measured 2026-12-02
+        grouped = csr_array((s, self._term_index, self._group_ptr), shape=self._group_shape)
+        c2 = np.asarray(grouped @ self._coef_t)
         return (psi2 @ c2).T.reshape(len(self.outputs), self._nb1, -1)
 
 
@@ -393,8 +460,8 @@ class _SplitPiece:
         free = _Piece(arrays, outputs, prefix + "free/")
         if not (gate.n_bootstrap == contact.n_bootstrap == free.n_bootstrap):
             raise ValueError(f"{prefix}: sides differ in bootstrap size")
-        if not (gate.delta_v_design == contact.delta_v_design == free.delta_v_design):
-            raise ValueError(f"{prefix}: sides differ in design range")
+        if not (gate.same_basis(contact) and gate.same_basis(free)):
+            raise ValueError(f"{prefix}: the gate and the sides differ in their basis")
         sa = object.__setattr__
         sa(self, "outputs", outputs)
         sa(self, "_band", float(band_mm))
@@ -442,15 +509,18 @@ class _SplitPiece:
 
     def samples(self, xc: FloatArray, post: FloatArray, seat: FloatArray) -> FloatArray:
         """Fitted-scale outputs, shape (n_out, B + 1, n) at fixed inputs and sensor samples."""
-        gate = self._gate.samples(xc, post, seat)[0, 0]  # point gate PCE, (n,)
+        basis = self._gate.sensor_basis(xc, post, seat)  # shared: the sides' basis is the gate's
+        gate = self._gate.samples(xc, post, seat, basis)[0, 0]  # point gate PCE, (n,)
         wc = self.struck_weight(gate)
         out = np.zeros((len(self.outputs), self.n_bootstrap + 1, post.size))
+        fixed, up, us = basis
         for side, w in ((self._contact, wc), (self._free, 1.0 - wc)):
             cols = np.flatnonzero(w > 0.0)
             if cols.size == post.size:
-                out += w * side.samples(xc, post, seat)
+                out += w * side.samples(xc, post, seat, basis)
             elif cols.size:
-                out[:, :, cols] += w[cols] * side.samples(xc, post[cols], seat[cols])
+                sub = (fixed, up[cols], us[cols])
+                out[:, :, cols] += w[cols] * side.samples(xc, post[cols], seat[cols], sub)
         return out
 
 
