@@ -132,3 +132,25 @@ def test_propagation_through_a_split_piece_matches_predict(
     wide = split.propagate(**point)
     lo, hi = wide.measures_ci95["hic15"]
     assert lo < wide.measures["hic15"] < hi
+
+
+def test_inconsistent_split_pieces_are_rejected() -> None:
+    spec = replace(SPEC, ranges=RANGES)
+    x = from_unit(2.0 * latin_hypercube(300, 5, np.random.default_rng(4)) - 1.0, RANGES)
+    config = replace(CONFIG, n_boot=2)
+    fit = fit_family(spec, x, _outputs(spec, x), config, RANGES, "piece0/", _clearance(x))
+    assert fit.split is not None
+    _family(fit, spec)  # consistent: loads
+    missing = dict(fit.arrays)
+    del missing["piece0/free/candidates"]
+    with pytest.raises(ValueError, match="missing"):
+        _family(replace(fit, arrays=missing), spec)
+    other_basis = dict(fit.arrays)
+    other_basis["piece0/contact/recurrence_alpha"] = (
+        other_basis["piece0/gate/recurrence_alpha"] + 0.1
+    )
+    with pytest.raises(ValueError, match="basis"):
+        _family(replace(fit, arrays=other_basis), spec)
+    bad_band = replace(fit, split={**fit.split, "band_mm": 0.0})
+    with pytest.raises(ValueError, match="band"):
+        _family(bad_band, spec)
