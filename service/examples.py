@@ -112,7 +112,7 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         },
         "surrogate_evaluation": {
             "version": "5",
-            "sha256": "e9a003eb94852204216bdd4f590f72c3cdd523f34409628b2398018047dea1ea",
+            "sha256": "82445d0cc30142031e49732d9d78c2d49364d2442a2d649491b72a33d0e175c5",
         },
         "triage_code": {
             "version": "0.2.0",

@@ -49,7 +49,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from types import MappingProxyType
@@ -232,6 +232,11 @@ _FIXED_INPUTS: Final[tuple[int, int, int]] = (0, 1, 4)
 #: shape (max degree + 1,), then of the posture and seat track samples, each
 #: shape (n, max degree + 1).
 _SensorBasis = tuple[tuple[FloatArray, ...], FloatArray, FloatArray]
+
+
+def _smoothstep(u: FloatArray) -> FloatArray:
+    """``3 u^2 - 2 u^3`` on u in [0, 1]: the blend weight of pieces and of split sides."""
+    return np.asarray(u * u * (3.0 - 2.0 * u), dtype=np.float64)
 
 
 class _Piece:
@@ -480,32 +485,41 @@ class _SplitPiece:
 
     def struck_weight(self, clearance_mm: FloatArray) -> FloatArray:
         """Weight of the struck side at gate clearances (mm): 1 below -band, 0 above +band."""
-        u = np.clip((self._band - clearance_mm) / (2.0 * self._band), 0.0, 1.0)
-        return np.asarray(u * u * (3.0 - 2.0 * u), dtype=np.float64)
+        return _smoothstep(np.clip((self._band - clearance_mm) / (2.0 * self._band), 0.0, 1.0))
 
     def clearance(self, x: FloatArray) -> FloatArray:
         """Point gate PCE at raw inputs: predicted head clearance, mm, shape (n,)."""
         return np.asarray(self._gate.predict_raw(x, 0)[:, 0], dtype=np.float64)
 
-    def predict_raw(self, x: FloatArray, replicate: int) -> FloatArray:
-        """Fitted-scale outputs at raw inputs, shape (n, n_out)."""
+    def _blend_rows(
+        self,
+        x: FloatArray,
+        shape: tuple[int, ...],
+        side_values: Callable[[_Piece, FloatArray], FloatArray],
+    ) -> FloatArray:
+        """``w * struck + (1 - w) * free`` per input row, each side evaluated on its rows only.
+
+        `shape` is the per-row shape of ``side_values(side, rows)``.
+        """
         wc = self.struck_weight(self.clearance(x))
-        out = np.zeros((x.shape[0], len(self.outputs)))
+        out = np.zeros((x.shape[0], *shape))
+        expand = (slice(None),) + (None,) * len(shape)
         for side, w in ((self._contact, wc), (self._free, 1.0 - wc)):
             rows = w > 0.0
             if np.any(rows):
-                out[rows] += w[rows, None] * side.predict_raw(x[rows], replicate)
+                out[rows] += w[rows][expand] * side_values(side, x[rows])
         return out
+
+    def predict_raw(self, x: FloatArray, replicate: int) -> FloatArray:
+        """Fitted-scale outputs at raw inputs, shape (n, n_out)."""
+        return self._blend_rows(
+            x, (len(self.outputs),), lambda side, xr: side.predict_raw(xr, replicate)
+        )
 
     def predict_raw_all(self, x: FloatArray) -> FloatArray:
         """Fitted-scale outputs, point PCE and replicates, shape (n, n_out, B + 1)."""
-        wc = self.struck_weight(self.clearance(x))
-        out = np.zeros((x.shape[0], len(self.outputs), self.n_bootstrap + 1))
-        for side, w in ((self._contact, wc), (self._free, 1.0 - wc)):
-            rows = w > 0.0
-            if np.any(rows):
-                out[rows] += w[rows, None, None] * side.predict_raw_all(x[rows])
-        return out
+        shape = (len(self.outputs), self.n_bootstrap + 1)
+        return self._blend_rows(x, shape, lambda side, xr: side.predict_raw_all(xr))
 
     def samples(self, xc: FloatArray, post: FloatArray, seat: FloatArray) -> FloatArray:
         """Fitted-scale outputs, shape (n_out, B + 1, n) at fixed inputs and sensor samples."""
@@ -822,7 +836,7 @@ class SurrogateFamily:
                 continue
             u = np.clip((v - (e - half)) / (2.0 * half), 0.0, 1.0)
             zone = (u > 0.0) & (u < 1.0)
-            up = u * u * (3.0 - 2.0 * u)
+            up = _smoothstep(u)
             w[zone, j - 1] = 1.0 - up[zone]
             w[zone, j] = up[zone]
             others = np.ones(n_p, dtype=bool)
