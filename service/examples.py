@@ -107,12 +107,12 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
             "sha256": "4811df3c925fe85a84800deb135d25e010ab786df25562441ef01616113e0aa5",
         },
         "surrogates": {
-            "version": "4.0.2.0",
-            "sha256": "beda62d71092da52792889befdefb6f8520251535307b3f4bdf475b9c861bd6e",
+            "version": "5.0.2.0",
+            "sha256": "950ce168e780bf5da18e9910a85a5c2f0e04759c01c7e87f031d2ec15f1f7e3c",
         },
         "surrogate_evaluation": {
-            "version": "5",
-            "sha256": "82445d0cc30142031e49732d9d78c2d49364d2442a2d649491b72a33d0e175c5",
+            "version": "6",
+            "sha256": "4f79e8244086a72788b30472833a73c9c3d06be310f0b99d4e9e3f4d509f4db8",
         },
         "triage_code": {
             "version": "0.2.0",

@@ -55,6 +55,7 @@ from models.surrogate.basis import (
     stieltjes,
 )
 from models.surrogate.fit import MAX_DEGREE, SparseFit, fit_adaptive, fit_degree
+from models.surrogate.kriging import fit_residual_kriging
 from models.surrogate.spec import (
     DELTA_V_PIECES_KMH,
     FAMILIES,
@@ -566,6 +567,38 @@ def heldout_scores(spec: FamilySpec, y_true: FloatArray, y_pred: FloatArray) -> 
     return out
 
 
+def _fit_kriging(
+    spec: FamilySpec,
+    piece_arrays: Mapping[str, npt.NDArray[Any]],
+    piece_meta: Mapping[str, Any],
+    prefix: str,
+    x: FloatArray,
+    y: FloatArray,
+) -> tuple[dict[str, FloatArray], dict[str, Any]]:
+    """Kriging of one piece's point-PCE residuals on its design (models.surrogate.kriging).
+
+    Parameters
+    ----------
+    piece_arrays : mapping
+        The piece's fitted arrays (:func:`fit_family`).
+    piece_meta : mapping
+        The piece's metadata (``design_ranges``, ``split``), without ``kriging``.
+    x : ndarray, shape (n, 5)
+    y : ndarray, shape (n, n_outputs)
+        The piece's design and LPM outputs (rows with a NaN are left out).
+    """
+    from models.surrogate.evaluate import _piece
+
+    fitted = tuple(o for o in spec.outputs if o != "p_iss15")
+    base = _piece(piece_arrays, fitted, prefix, piece_meta)
+    ok = np.all(np.isfinite(y), axis=1)
+    xs, ys = x[ok], y[ok]
+    truth = np.stack([to_output_scale(o, ys[:, spec.outputs.index(o)]) for o in fitted], axis=1)
+    residuals = truth - base.predict_raw(xs, 0)
+    ranges = tuple((float(a), float(b)) for a, b in piece_meta["design_ranges"])
+    return fit_residual_kriging(to_unit(xs, ranges), residuals, prefix)
+
+
 def build_family(spec: FamilySpec, directory: Path, config: BuildConfig) -> dict[str, Any]:
     """Run the LPM on the design, fit, and write ``<directory>/<family>.npz``.
 
@@ -614,6 +647,10 @@ def build_family(spec: FamilySpec, directory: Path, config: BuildConfig) -> dict
             }
             if fam.split is not None:
                 piece["split"] = fam.split
+            tk = time.perf_counter()
+            kriging, piece["kriging"] = _fit_kriging(spec, fam.arrays, piece, f"piece{k}/", x, y)
+            arrays.update(kriging)
+            t_fit += time.perf_counter() - tk
             pieces.append(piece)
         ta = time.perf_counter()
         xh = lo + (hi - lo) * _seed(config, spec.name, "holdout").random(

@@ -16,6 +16,10 @@ Propagation (reference paper section 2.5; issue 5)
   the design holds two sets of PCEs, one per side of the strike onset, and a
   gate PCE of the head's least clearance (mm) that picks the side at every
   point, blended over a few millimetres (:class:`_SplitPiece`).
+* Each piece carries the Kriging of its point-PCE residuals on its design
+  runs (PC-Kriging, :mod:`models.surrogate.kriging`): one kernel matrix of the
+  sensor samples against the design and one matrix product, added on the
+  fitted scale to the point PCE and every replicate (:class:`_KrigedPiece`).
 * Delta-V, |angle from the mode axis| and pulse duration are taken as given
   (clamped to the design ranges; :attr:`UncertaintyResult.clamped_inputs`).
 * P(ISS >= 15) is not read from its own PCE: at every sensor sample of every
@@ -64,6 +68,7 @@ from models.impact_mode import ImpactMode
 from models.injury.batch import p_iss15_batch
 from models.notification import Body
 from models.surrogate.basis import design_matrix, evaluate_univariate
+from models.surrogate.kriging import ResidualKriging
 from models.surrogate.spec import (
     AIRBAG_MODES,
     FAMILIES,
@@ -102,12 +107,18 @@ EVALUATION_NAME: Final[str] = "PCE sensor-uncertainty propagation and interval c
 #: 4: delta-V pieces split at the head-strike onset, chosen by a gate PCE (format 4);
 #: 5: the sensor-sample sums by a sparse product and one sensor basis per split
 #: piece (summation order only: served values within 4e-12 relative of version
-#: 4 at 480 random readings over the 24 families).
-EVALUATION_VERSION: Final[str] = "5"
+#: 4 at 480 random readings over the 24 families);
+#: 6: the Kriging of each piece's residuals added to its PCEs (format 5,
+#: models.surrogate.kriging).
+EVALUATION_VERSION: Final[str] = "6"
 
 
 #: Sources of the evaluation (this module and the batch risk it calls).
-_EVALUATION_SOURCES: Final[tuple[Path, ...]] = (Path(__file__), Path(_batch_module.__file__))
+_EVALUATION_SOURCES: Final[tuple[Path, ...]] = (
+    Path(__file__),
+    Path(_batch_module.__file__),
+    Path(__file__).with_name("kriging.py"),
+)
 
 
 def evaluation_sha256() -> str:
@@ -538,19 +549,91 @@ class _SplitPiece:
         return out
 
 
+class _KrigedPiece:
+    """A piece (plain or split) plus the Kriging of its residuals (immutable).
+
+    :mod:`models.surrogate.kriging`: the correction, a function of the inputs
+    only, is added on the fitted scale to the point PCE and to every bootstrap
+    replicate alike. Same interface as :class:`_Piece`.
+    """
+
+    __slots__ = ("_kriging", "_ranges", "base", "outputs")
+
+    outputs: tuple[str, ...]
+    #: the PCE piece the correction applies to
+    base: _Piece | _SplitPiece
+    _kriging: ResidualKriging
+    _ranges: tuple[tuple[float, float], ...]
+
+    def __setattr__(self, key: str, value: object) -> None:
+        raise AttributeError(f"surrogate pieces are immutable ({key})")
+
+    def __init__(
+        self,
+        base: _Piece | _SplitPiece,
+        kriging: ResidualKriging,
+        ranges: tuple[tuple[float, float], ...],
+        prefix: str,
+    ) -> None:
+        if kriging.n_outputs != len(base.outputs):
+            raise ValueError(
+                f"{prefix}: kriging has {kriging.n_outputs} outputs, the piece {len(base.outputs)}"
+            )
+        sa = object.__setattr__
+        sa(self, "outputs", base.outputs)
+        sa(self, "base", base)
+        sa(self, "_kriging", kriging)
+        sa(self, "_ranges", ranges)
+
+    @property
+    def n_bootstrap(self) -> int:
+        return self.base.n_bootstrap
+
+    @property
+    def delta_v_design(self) -> tuple[float, float]:
+        """Delta-V design range of the piece, km/h."""
+        return self.base.delta_v_design
+
+    def correction(self, x: FloatArray) -> FloatArray:
+        """Kriging correction at raw inputs, fitted scale, shape (n, n_out)."""
+        return self._kriging.correction(to_unit(x, self._ranges))
+
+    def predict_raw(self, x: FloatArray, replicate: int) -> FloatArray:
+        """Fitted-scale outputs at raw inputs, shape (n, n_out)."""
+        return self.base.predict_raw(x, replicate) + self.correction(x)
+
+    def predict_raw_all(self, x: FloatArray) -> FloatArray:
+        """Fitted-scale outputs, point PCE and replicates, shape (n, n_out, B + 1)."""
+        return self.base.predict_raw_all(x) + self.correction(x)[:, :, None]
+
+    def samples(self, xc: FloatArray, post: FloatArray, seat: FloatArray) -> FloatArray:
+        """Fitted-scale outputs, shape (n_out, B + 1, n) at fixed inputs and sensor samples."""
+        pts = np.repeat(xc, post.size, axis=0)
+        pts[:, _POSTURE] = post
+        pts[:, _SEAT] = seat
+        return self.base.samples(xc, post, seat) + self.correction(pts).T[:, None, :]
+
+
 def _piece(
     arrays: Mapping[str, npt.NDArray[Any]],
     outputs: tuple[str, ...],
     prefix: str,
     piece_meta: Mapping[str, Any],
-) -> _Piece | _SplitPiece:
-    """The piece at `prefix`: split at the head-strike onset when its metadata says so."""
+) -> _Piece | _SplitPiece | _KrigedPiece:
+    """The piece at `prefix`: split at the head-strike onset when its metadata
+    says so, with the Kriging of its residuals when its metadata has one."""
     split = piece_meta.get("split")
+    base: _Piece | _SplitPiece
     if split is None:
-        return _Piece(arrays, outputs, prefix)
-    if split.get("gate") != HEAD_CLEARANCE:
+        base = _Piece(arrays, outputs, prefix)
+    elif split.get("gate") != HEAD_CLEARANCE:
         raise ValueError(f"{prefix}: unknown split gate {split.get('gate')!r}")
-    return _SplitPiece(arrays, outputs, prefix, float(split["band_mm"]))
+    else:
+        base = _SplitPiece(arrays, outputs, prefix, float(split["band_mm"]))
+    if piece_meta.get("kriging") is None:
+        return base
+    ranges = tuple((float(a), float(b)) for a, b in piece_meta["design_ranges"])
+    return _KrigedPiece(base, ResidualKriging.from_arrays(arrays, prefix), ranges, prefix)
 
 
 class SurrogateFamily:
@@ -605,7 +688,7 @@ class SurrogateFamily:
     _meas_rows: IntArray
     _measures: tuple[str, ...]
     _mode: ImpactMode
-    _pieces: tuple[_Piece | _SplitPiece, ...]
+    _pieces: tuple[_Piece | _SplitPiece | _KrigedPiece, ...]
 
     def __setattr__(self, key: str, value: object) -> None:
         raise AttributeError(f"SurrogateFamily is immutable ({key})")
@@ -865,8 +948,9 @@ class SurrogateFamily:
         out = np.full(xv.shape[0], np.nan)
         for i, piece in enumerate(self._pieces):
             rows = k == i
-            if isinstance(piece, _SplitPiece) and np.any(rows):
-                out[rows] = piece.clearance(xv[rows])
+            base = piece.base if isinstance(piece, _KrigedPiece) else piece
+            if isinstance(base, _SplitPiece) and np.any(rows):
+                out[rows] = base.clearance(xv[rows])
         return out
 
     def predict(
