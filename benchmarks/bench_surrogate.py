@@ -30,6 +30,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from results_md import write_section
 
+from models.surrogate.build import default_config
 from models.surrogate.evaluate import (
     N_SENSOR_SAMPLES,
     SurrogateLibrary,
@@ -115,11 +116,15 @@ def main() -> int:
     ]
     if timings:
         fams = timings["families"]
+        cfg = default_config()
+        design = f"{cfg.n_train}-run designs per delta-V piece" + "".join(
+            f", {m} {n}" for m, n in cfg.n_train_by_mode
+        )
         lines += [
             f"Full build ({'rerun now' if args.rebuild else 'last recorded build'}): "
             f"**{timings['total_seconds']:.0f} s** wall for {len(fams)} families with "
-            f"{timings['workers']} worker processes (600-run designs per delta-V piece; the issue "
-            "asks for the figure, not a bound: with 300-run designs it was 275 s)"
+            f"{timings['workers']} worker processes ({design}; the issue asks for the "
+            "figure, not a bound: with 300-run designs it was 275 s)"
             + (
                 f", then {timings['report_seconds']:.0f} s for REPORT.md, the plots and the "
                 "coverage check (direct LPM runs)."

@@ -100,19 +100,19 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         },
         "lpm_code": {
             "version": "0.2.0",
-            "sha256": "493bbc3a393ae3794ca10aa33e34bbdd1d08b3e9e58159ea3f88a9bd1c83396f",
+            "sha256": "8991761c3b3aa940fbc4326062ff6d44973b0aaf690e7496ae063ca8cdd79127",
         },
         "risk_calibration": {
             "version": "1",
             "sha256": "4811df3c925fe85a84800deb135d25e010ab786df25562441ef01616113e0aa5",
         },
         "surrogates": {
-            "version": "5.0.2.0",
-            "sha256": "950ce168e780bf5da18e9910a85a5c2f0e04759c01c7e87f031d2ec15f1f7e3c",
+            "version": "6.0.2.0",
+            "sha256": "d90cd98c565e41b7fabdf4bb9d67f7629053b476cbff8f3152f260fc4c86fff9",
         },
         "surrogate_evaluation": {
-            "version": "6",
-            "sha256": "4f79e8244086a72788b30472833a73c9c3d06be310f0b99d4e9e3f4d509f4db8",
+            "version": "7",
+            "sha256": "d0fbb019a6456227d2c615db656586e5d1c067d9f6622e1d99ea9207a6b36021",
         },
         "triage_code": {
             "version": "0.2.0",

@@ -236,6 +236,14 @@ def _seg(
     return (float(a[0]), float(a[1])), (float(b[0]), float(b[1]))
 
 
+#: Determinant below which the glass and panel lines count as parallel (m^2):
+#: segment directions are tenths of a metre long, so 1e-12 is ~1e-10 rad.
+_PARALLEL_DET_M2 = 1e-12
+#: Round-off allowance on the panel-face fraction where the lines meet
+#: (dimensionless): a windshield designed to meet the panel top exactly.
+_ON_FACE_TOLERANCE = 1e-9
+
+
 def _glass_to_panel(
     low: tuple[float, float],
     high: tuple[float, float],
@@ -261,7 +269,7 @@ def _glass_to_panel(
     d0 = np.subtract(low, high)
     d1 = np.subtract(panel_b, panel_a)
     det = d0[0] * -d1[1] + d1[0] * d0[1]
-    if abs(det) < 1e-12:
+    if abs(det) < _PARALLEL_DET_M2:
         return low
     rhs = np.subtract(panel_a, high)
     t = (rhs[0] * -d1[1] + d1[0] * rhs[1]) / det
@@ -269,7 +277,7 @@ def _glass_to_panel(
         return low
     # where on the panel face (0 at panel_a, 1 at panel_b) the lines meet
     s = (d0[0] * rhs[1] - d0[1] * rhs[0]) / det
-    if not -1e-9 <= s <= 1.0 + 1e-9:
+    if not -_ON_FACE_TOLERANCE <= s <= 1.0 + _ON_FACE_TOLERANCE:
         raise ValueError(
             f"windshield line meets the panel line outside the panel face (at {s:.3f} of "
             "its length): check frontal.windshield.* against the dash/panel geometry"

@@ -179,6 +179,12 @@ UNLOAD_BLEND_SPEED = 0.1
 #: relaxation is stable for dt < 2 ARM_TIME_S).
 ARM_TIME_S = 1.0e-3
 
+#: Arming state above which a contact counts as armed in the diagnostics
+#: (its clearance and penetration are reported). [R] ``A`` relaxes to 0 or 1
+#: with :data:`ARM_TIME_S`; half-way is the natural cut between "in front of the
+#: surface" and "gone around it". Only the diagnostics use it, not the forces.
+ARMED_DIAGNOSTIC = 0.5
+
 #: Radius (m) of the rounded edge at each end of a contact surface. [R] Before,
 #: the end was sharp (a point radius around the end point, from the front
 #: only): a head deep in the driver bag (its centre behind the bag face line)
@@ -810,7 +816,9 @@ def rhs_into(
         if want:
             # geometric clearance to the undeformed surface, before the
             # crush-depth test below can mark the point as gone around
-            diag[DIAG_FIXED + 2 * nc + nb + c] = -pen if pen <= 0.0 or arm >= 0.5 else GAP_NONE
+            diag[DIAG_FIXED + 2 * nc + nb + c] = (
+                -pen if pen <= 0.0 or arm >= ARMED_DIAGNOSTIC else GAP_NONE
+            )
         if row[C_BCAP] > 0.0:
             crush = y[2 * NQ + 2 * nb + c]
             # (a structure crushed to its stroke limit is a stop, not passed)
@@ -853,7 +861,7 @@ def rhs_into(
         if want:
             diag[DIAG_FIXED + c] = fmag
             # the penetration of a contact the point is in (not of one it passes behind)
-            diag[DIAG_FIXED + nc + nb + c] = pen if pen > 0.0 and arm >= 0.5 else 0.0
+            diag[DIAG_FIXED + nc + nb + c] = pen if pen > 0.0 and arm >= ARMED_DIAGNOSTIC else 0.0
 
     # --- belts -------------------------------------------------------------
     for b in range(nb):

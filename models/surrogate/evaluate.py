@@ -109,8 +109,9 @@ EVALUATION_NAME: Final[str] = "PCE sensor-uncertainty propagation and interval c
 #: piece (summation order only: served values within 4e-12 relative of version
 #: 4 at 480 random readings over the 24 families);
 #: 6: the Kriging of each piece's residuals added to its PCEs (format 5,
-#: models.surrogate.kriging).
-EVALUATION_VERSION: Final[str] = "6"
+#: models.surrogate.kriging);
+#: 7: the gate of a split piece is a point PCE, evaluated alone (format 6).
+EVALUATION_VERSION: Final[str] = "7"
 
 
 #: Sources of the evaluation (this module and the batch risk it calls).
@@ -474,8 +475,10 @@ class _SplitPiece:
         gate = _Piece(arrays, (HEAD_CLEARANCE,), prefix + "gate/")
         contact = _Piece(arrays, outputs, prefix + "contact/")
         free = _Piece(arrays, outputs, prefix + "free/")
-        if not (gate.n_bootstrap == contact.n_bootstrap == free.n_bootstrap):
+        if contact.n_bootstrap != free.n_bootstrap:
             raise ValueError(f"{prefix}: sides differ in bootstrap size")
+        if gate.n_bootstrap != 0:
+            raise ValueError(f"{prefix}: the gate is a point PCE (no bootstrap replicates)")
         if not (gate.same_basis(contact) and gate.same_basis(free)):
             raise ValueError(f"{prefix}: the gate and the sides differ in their basis")
         sa = object.__setattr__

@@ -29,7 +29,7 @@ __all__ = [
 ]
 
 #: Version of the artifact layout; bump when the members or their meaning change.
-FORMAT_VERSION = "5"
+FORMAT_VERSION = "6"
 #: File name of the manifest in the artifact directory.
 MANIFEST_NAME = "manifest.json"
 _ZIP_EPOCH = (1980, 1, 1, 0, 0, 0)

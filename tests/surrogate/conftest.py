@@ -19,7 +19,12 @@ from models.surrogate.spec import FAMILIES, FamilySpec
 TINY_NAME = "frontal__male_50th__belted__airbag"
 TINY_DELTA_V = (40.0, 60.0)
 TINY_CONFIG = BuildConfig(
-    n_train=250, n_holdout=100, n_boot=150, seed=7, delta_v_pieces_kmh=TINY_DELTA_V
+    n_train=250,
+    n_train_by_mode=(),
+    n_holdout=100,
+    n_boot=150,
+    seed=7,
+    delta_v_pieces_kmh=TINY_DELTA_V,
 )
 
 

@@ -139,7 +139,12 @@ def test_out_of_range_inputs_are_clamped_and_flagged(tiny_library_dir: Path) -> 
 
 def test_build_is_bit_reproducible_and_resumable(tmp_path: Path) -> None:
     config = BuildConfig(
-        n_train=40, n_holdout=10, n_boot=5, seed=3, delta_v_pieces_kmh=(40.0, 50.0, 60.0)
+        n_train=40,
+        n_train_by_mode=(),
+        n_holdout=10,
+        n_boot=5,
+        seed=3,
+        delta_v_pieces_kmh=(40.0, 50.0, 60.0),
     )
     spec = tiny_spec()
     for sub in ("a", "b"):

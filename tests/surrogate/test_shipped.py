@@ -48,8 +48,8 @@ def _pooled_heldout() -> tuple[dict[str, float], float]:
 def test_shipped_heldout_pooled() -> None:
     """Issue 5 held-out check on the shipped artifacts (their stored held-out LPM runs,
     150 uniform random points per family): pooled median relative error of every
-    measure under 5 %; ISS15+ agreement held to a 95 % regression bound (target 97 %,
-    see the xfail below and REPORT.md for the per-family figures)."""
+    measure under 5 %; ISS15+ agreement held to a 95 % regression bound (the 97 %
+    target: the next tests; REPORT.md for the per-family figures)."""
     errors, agreement = _pooled_heldout()
     assert all(e < 0.05 for e in errors.values()), errors
     assert agreement >= 0.95, agreement
@@ -85,14 +85,8 @@ def test_shipped_heldout_agreement_at_the_service_decision() -> None:
     assert float(np.mean(agree)) > 0.97
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="open item: per family, the frontal belted 5F without airbag stays at 96.7 % (5 of"
-    " 150 held-out points, at 66-115 km/h, where her head strikes the wheel in almost every"
-    " run and the hinges are other contacts; REPORT.md Table B; 96.0 % before the Kriging of"
-    " the residuals); every other family is at 98.7 % or more",
-)
 def test_shipped_heldout_agreement_target_per_family() -> None:
+    """Issue 5 target per family: ISS15+ agreement above 97 % on its 150 held-out points."""
     import numpy as np
 
     from models.surrogate.evaluate import default_artifact_dir
@@ -109,6 +103,48 @@ def test_shipped_heldout_agreement_target_per_family() -> None:
         if agreement <= 0.97:
             low[name] = agreement
     assert low == {}
+
+
+def _per_family_medians_above_target() -> dict[str, dict[str, float]]:
+    """Per family, the measures whose held-out median relative error is 5 % or more."""
+    import numpy as np
+
+    from models.surrogate.evaluate import default_artifact_dir
+    from models.surrogate.store import read_artifact
+
+    high: dict[str, dict[str, float]] = {}
+    for name, fam in SurrogateLibrary.load().families().items():
+        arrays, _ = read_artifact(default_artifact_dir() / f"{name}.npz")
+        x, y = arrays["heldout_x"], arrays["heldout_y"]
+        ok = np.all(np.isfinite(y), axis=1)
+        pred, y = fam.predict(x[ok]), y[ok]
+        for k, o in enumerate(fam.outputs):
+            if o in ("p_iss15", "iss"):
+                continue
+            med = float(
+                np.median(np.abs(pred[:, k] - y[:, k]) / np.maximum(np.abs(y[:, k]), 1e-12))
+            )
+            if med >= 0.05:
+                high.setdefault(name, {})[o] = med
+    return high
+
+
+def test_shipped_heldout_median_per_family_regression() -> None:
+    """Per family and measure, the held-out median relative error stays under a 7 %
+    regression bound (the issue's 5 % target: the xfail below, REPORT.md Table B)."""
+    high = _per_family_medians_above_target()
+    assert all(e < 0.07 for errs in high.values() for e in errs.values()), high
+
+
+@pytest.mark.xfail(
+    strict=True,
+    reason="open item: the near-side belted 5F without side airbag, HIC15 5.7 % (her head"
+    " strikes the side interior in every run above 20 km/h; 5.2 % with 1200-run designs, 4.2 %"
+    " with 2000 but 5.1 ms per propagation: BuildConfig.n_train_by_mode); every other family"
+    " and measure is under 4.7 % (REPORT.md Table B)",
+)
+def test_shipped_heldout_median_per_family_target() -> None:
+    assert _per_family_medians_above_target() == {}
 
 
 def test_shipped_p_interval_covers_the_monte_carlo_value() -> None:

@@ -20,7 +20,9 @@ from models.surrogate.spec import FAMILIES, INPUT_NAMES, FamilySpec
 
 SPEC = next(s for s in FAMILIES if s.name == "frontal__female_5th__belted__no_airbag")
 RANGES = ((30.0, 70.0), *SPEC.ranges[1:])
-CONFIG = BuildConfig(n_train=500, n_boot=8, seed=3, delta_v_pieces_kmh=(30.0, 70.0))
+CONFIG = BuildConfig(
+    n_train=500, n_train_by_mode=(), n_boot=8, seed=3, delta_v_pieces_kmh=(30.0, 70.0)
+)
 
 
 def _clearance(x: np.ndarray) -> np.ndarray:
@@ -63,12 +65,31 @@ def _family(fit: Any, spec: FamilySpec) -> SurrogateFamily:
 
 
 @pytest.fixture(scope="module")
-def families() -> tuple[SurrogateFamily, SurrogateFamily]:
+def fits() -> tuple[Any, Any]:
+    """The split and the unsplit fit of the same synthetic piece."""
     spec = replace(SPEC, ranges=RANGES)
     x = from_unit(2.0 * latin_hypercube(500, 5, np.random.default_rng(1)) - 1.0, RANGES)
     y = _outputs(spec, x)
     split = fit_family(spec, x, y, CONFIG, RANGES, "piece0/", clearance_mm=_clearance(x))
     whole = fit_family(spec, x, y, CONFIG, RANGES, "piece0/")
+    return split, whole
+
+
+def test_the_gate_is_a_point_pce_and_the_sides_are_bootstrapped(fits: tuple[Any, Any]) -> None:
+    split, _ = fits
+    gate = split.arrays["piece0/gate/head_clearance_mm/boot_offsets"]
+    assert gate.tolist() == [0]
+    assert split.arrays["piece0/gate/head_clearance_mm/point_terms"].size > 0
+    for side in ("contact", "free"):
+        off = split.arrays[f"piece0/{side}/hic15/boot_offsets"]
+        assert off.size == CONFIG.n_boot + 1
+        assert np.all(np.diff(off) > 0)
+
+
+@pytest.fixture(scope="module")
+def families(fits: tuple[Any, Any]) -> tuple[SurrogateFamily, SurrogateFamily]:
+    spec = replace(SPEC, ranges=RANGES)
+    split, whole = fits
     assert split.split is not None
     assert whole.split is None
     assert split.split["n_struck"] >= 30
