@@ -108,7 +108,7 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         },
         "surrogates": {
             "version": "6.0.2.0",
-            "sha256": "d90cd98c565e41b7fabdf4bb9d67f7629053b476cbff8f3152f260fc4c86fff9",
+            "sha256": "833e36e7eedd24d35e4b71682e6adc09ec8266173ffd10a3d6f8ee91c342665d",
         },
         "surrogate_evaluation": {
             "version": "7",

@@ -31,10 +31,11 @@ MIN_COVERAGE = 0.90
 
 
 #: Measures whose median relative error misses the 5 % target on the tiny
-#: family (open item, models/surrogate/REPORT.md): HIC15 and Nij have kinks in
-#: posture, seat track and duration (contact onset, HIC window switches, the
-#: Nij load case switching) that a sparse polynomial on 250 runs does not
-#: resolve; they are held to a regression bound here.
+#: 250-run family (the shipped families meet it: models/surrogate/REPORT.md):
+#: HIC15 and Nij have kinks in posture, seat track and duration (contact
+#: onset, HIC window switches, the Nij load case switching) that a sparse
+#: polynomial on 250 runs does not resolve; they are held to a regression
+#: bound here.
 ROUGH_MEASURES = ("hic15", "nij")
 #: Regression bound for those, median relative error.
 ROUGH_MAX_MEDIAN_RELATIVE_ERROR = 0.20
@@ -71,7 +72,12 @@ def test_heldout_points_against_direct_lpm(tiny_library_dir: Path) -> None:
         assert err < bound, (name, errors)
 
 
-@pytest.mark.xfail(reason="open item: HIC15 and Nij median relative error above 5 %", strict=True)
+@pytest.mark.xfail(
+    reason="the tiny 250-run family misses 5 % on HIC15 and Nij (by design: a test-sized"
+    " build); the shipped 1000-2000-run families meet it, see"
+    " tests/surrogate/test_shipped.py::test_shipped_heldout_median_per_family_under_target",
+    strict=True,
+)
 def test_heldout_hic_nij_within_five_percent(tiny_library_dir: Path) -> None:
     errors, _ = _heldout_errors(tiny_library_dir)
     assert all(errors[n] < MAX_MEDIAN_RELATIVE_ERROR for n in ROUGH_MEASURES), errors

@@ -98,6 +98,26 @@ def test_every_shipped_piece_has_its_kriging(shipped_library: SurrogateLibrary) 
             assert np.all(np.asarray(info["length_scale"]) > 0.0)
 
 
+def test_the_kriging_is_fitted_on_at_most_kriging_max_runs(
+    shipped_library: SurrogateLibrary,
+) -> None:
+    """The request-path kernel is (sensor samples x Kriging runs): the runs are the
+    first finite design rows, at most BuildConfig.kriging_max_runs of them."""
+    from models.surrogate.build import default_config
+
+    cap = default_config().kriging_max_runs
+    for name in shipped_library.families():
+        arrays = _artifact_arrays(name)
+        k = 0
+        while f"piece{k}/design_x" in arrays:
+            y = arrays[f"piece{k}/design_y"]
+            finite = int(np.all(np.isfinite(y), axis=1).sum())
+            n_k = arrays[f"piece{k}/kriging/train_u"].shape[0]
+            assert n_k == min(finite, cap), (name, k, n_k, finite)
+            k += 1
+        assert k == 4, name
+
+
 def test_kriging_lowers_the_pooled_heldout_error(shipped_library: SurrogateLibrary) -> None:
     """Over the 24 shipped families' held-out LPM runs, the PCE + Kriging surrogate
     has a lower median relative error of HIC15, Nij and every chest measure than

@@ -129,21 +129,9 @@ def _per_family_medians_above_target() -> dict[str, dict[str, float]]:
     return high
 
 
-def test_shipped_heldout_median_per_family_regression() -> None:
-    """Per family and measure, the held-out median relative error stays under a 7 %
-    regression bound (the issue's 5 % target: the xfail below, REPORT.md Table B)."""
-    high = _per_family_medians_above_target()
-    assert all(e < 0.07 for errs in high.values() for e in errs.values()), high
-
-
-@pytest.mark.xfail(
-    strict=True,
-    reason="open item: the near-side belted 5F without side airbag, HIC15 5.7 % (her head"
-    " strikes the side interior in every run above 20 km/h; 5.2 % with 1200-run designs, 4.2 %"
-    " with 2000 but 5.1 ms per propagation: BuildConfig.n_train_by_mode); every other family"
-    " and measure is under 4.7 % (REPORT.md Table B)",
-)
-def test_shipped_heldout_median_per_family_target() -> None:
+def test_shipped_heldout_median_per_family_under_target() -> None:
+    """Issue 5: per family and measure, the held-out median relative error is under
+    5 % (REPORT.md Table B)."""
     assert _per_family_medians_above_target() == {}
 
 
