@@ -198,15 +198,31 @@ def test_airbag_lowers_chest_deflection_at_56_kmh(params: ParameterSet, body: Bo
     assert with_bag.chest_deflection_mm < without.chest_deflection_mm
 
 
-def test_airbag_lowers_chest_acceleration_at_56_kmh(params: ParameterSet) -> None:
+#: The belted 5F's 3 ms chest acceleration with and without the bag, at both seatings.
+CHEST_G_5F_REASON = (
+    "open item: the bag adds its chest plateau to the 4 kN belt on the 5F's lighter"
+    " thorax, so her 3 ms chest acceleration rises with it (mid track 39.4 -> 51.9 g;"
+    " full forward, her regulatory seating, 49.6 -> 53.7 g) while her chest deflection"
+    " and VC fall (29.7 -> 26.3 mm, 0.18 -> 0.13 m/s). Published tests see the same:"
+    " adding a bag to the belt did not lower the dummy's chest g (SAE 851247, 1985),"
+    " NHTSA's 1984 35 mph test of a Mercedes 300SD measured 63 g for the belted driver"
+    " with the bag against 44 g for the belt-only passenger"
+)
+
+
+@pytest.mark.parametrize(
+    "body",
+    [Body.MALE_50TH, pytest.param(Body.FEMALE_5TH, marks=_known(CHEST_G_5F_REASON))],
+)
+def test_airbag_lowers_chest_acceleration_at_56_kmh(params: ParameterSet, body: Body) -> None:
     """The belted 50M's 3 ms chest acceleration is lower with the bag (45.5 vs
     45.8 g): without it his head is stopped by the wheel rim and the lower glass,
     and the neck loads the thorax (Nij 0.90). A close margin. Until the glass
     was run down to the panel (2026-12-01) it was an open item, 45.5 vs 40.7 g:
     his head met only the rounded lower end of the glass (1.5 kN; 3.0 kN on
-    the glass that now reaches the panel)."""
-    with_bag = _frontal(params, occupant(Body.MALE_50TH, belted=True, airbag=True))
-    without = _frontal(params, occupant(Body.MALE_50TH, belted=True, airbag=False))
+    the glass that now reaches the panel). The 5F: the open item above."""
+    with_bag = _frontal(params, occupant(body, belted=True, airbag=True))
+    without = _frontal(params, occupant(body, belted=True, airbag=False))
     assert with_bag.chest_a3ms_g is not None
     assert without.chest_a3ms_g is not None
     assert with_bag.chest_a3ms_g < without.chest_a3ms_g
