@@ -186,16 +186,19 @@ def test_airbag_lowers_head_and_neck_measures_at_the_regulatory_seating(
 
 
 @pytest.mark.parametrize("body", list(Body))
-def test_airbag_lowers_chest_deflection_at_56_kmh(params: ParameterSet, body: Body) -> None:
+def test_airbag_lowers_chest_deflection_and_vc_at_56_kmh(params: ParameterSet, body: Body) -> None:
     """With the bag the belt load limit is the airbag car's (4 kN instead of 5 kN)
     and the bag spreads its chest load over the thorax and shoulders
     (``frontal.airbag.chest_sternum_share``), so the sternum deflects less
-    than with the belt alone."""
+    than with the belt alone, and more slowly (VC)."""
     with_bag = _frontal(params, occupant(body, belted=True, airbag=True))
     without = _frontal(params, occupant(body, belted=True, airbag=False))
     assert with_bag.chest_deflection_mm is not None
     assert without.chest_deflection_mm is not None
     assert with_bag.chest_deflection_mm < without.chest_deflection_mm
+    assert with_bag.chest_vc_m_s is not None
+    assert without.chest_vc_m_s is not None
+    assert with_bag.chest_vc_m_s < without.chest_vc_m_s
 
 
 #: The belted 5F's 3 ms chest acceleration with and without the bag, at both seatings.
