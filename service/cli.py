@@ -10,6 +10,7 @@ Commands::
     aacn-triage triage --batch IN.jsonl --out OUT.jsonl [--resume]
     aacn-triage simulate FILE.json [--plot OUT.png]
     aacn-triage build-surrogates [--family NAME] [--workers N] ...
+    aacn-triage validate-surrogates [--n N] [--seed S] [--family NAME] ...
     aacn-triage baseline fit [--data CSV] [--out JSON]
 """
 
@@ -282,6 +283,12 @@ def _cmd_build_surrogates(args: argparse.Namespace) -> int:
     return int(build_main(args.build_args) or 0)
 
 
+def _cmd_validate_surrogates(args: argparse.Namespace) -> int:
+    from models.surrogate.validate import main as validate_main
+
+    return int(validate_main(args.validate_args) or 0)
+
+
 def _cmd_baseline(args: argparse.Namespace) -> int:
     from models.baseline.fit import main as fit_main
 
@@ -346,6 +353,14 @@ def build_parser() -> argparse.ArgumentParser:
     build.add_argument("build_args", nargs=argparse.REMAINDER, help="see --help")
     build.set_defaults(func=_cmd_build_surrogates)
 
+    val = sub.add_parser(
+        "validate-surrogates",
+        help="score the surrogates on fresh direct LPM runs (resumable)",
+        add_help=False,
+    )
+    val.add_argument("validate_args", nargs=argparse.REMAINDER, help="see --help")
+    val.set_defaults(func=_cmd_validate_surrogates)
+
     base = sub.add_parser("baseline", help="statistical baseline")
     base_sub = base.add_subparsers(dest="baseline_command", required=True)
     fit_cmd = base_sub.add_parser("fit", help="refit the logistic baseline on NASS-CDS")
@@ -365,6 +380,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         # handed over whole: argparse's REMAINDER does not pass on arguments
         # that start with "--" (``--family NAME``, ``--help``)
         return _cmd_build_surrogates(argparse.Namespace(build_args=raw[1:]))
+    if raw[:1] == ["validate-surrogates"]:
+        return _cmd_validate_surrogates(argparse.Namespace(validate_args=raw[1:]))
     args = build_parser().parse_args(raw)
     return int(args.func(args))
 

@@ -26,7 +26,14 @@ from models.surrogate.evaluate import (
     SurrogateLibrary,
     UncertaintyResult,
 )
-from models.surrogate.spec import FAMILIES, HEAD_CLEARANCE, LOGIT_CLIP, P_RESOLUTION
+from models.surrogate.spec import (
+    AGREEMENT_TARGET,
+    FAMILIES,
+    HEAD_CLEARANCE,
+    LOGIT_CLIP,
+    MEDIAN_ERROR_TARGET,
+    P_RESOLUTION,
+)
 
 __all__ = [
     "COVERAGE_SEED",
@@ -723,7 +730,9 @@ def _misses(fams: list[SurrogateFamily], held: Mapping[str, Mapping[str, Any]]) 
         bad = [
             f"{o} {100 * h[o]['median_rel_error']:.0f}%"
             for o in fam.outputs
-            if o in h and "median_rel_error" in h[o] and h[o]["median_rel_error"] > 0.05
+            if o in h
+            and "median_rel_error" in h[o]
+            and h[o]["median_rel_error"] > MEDIAN_ERROR_TARGET
         ]
         if bad:
             out.append(f"{fam.name} ({', '.join(bad)})")
@@ -734,7 +743,7 @@ def _agreement_misses(fams: list[SurrogateFamily], held: Mapping[str, Mapping[st
     out = [
         f"{f.name} {100 * held[f.name]['decision_agreement_p']:.1f}%"
         for f in fams
-        if held[f.name]["decision_agreement_p"] <= 0.97
+        if held[f.name]["decision_agreement_p"] <= AGREEMENT_TARGET
     ]
     return "; ".join(out) if out else "none"
 

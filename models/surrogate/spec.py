@@ -39,6 +39,7 @@ from models.lpm.domain import POSTURE_RANGE_DEG, SEAT_TRACK_RANGE_MM
 from models.notification import Body
 
 __all__ = [
+    "AGREEMENT_TARGET",
     "AIRBAG_MODES",
     "ANGLE_RANGE_DEG",
     "DELTA_V_PIECES_KMH",
@@ -51,6 +52,7 @@ __all__ = [
     "LOG_INPUTS",
     "P_RESOLUTION",
     "MEASURE_FLOORS",
+    "MEDIAN_ERROR_TARGET",
     "FamilySpec",
     "HEAD_CLEARANCE",
     "MODE_OUTPUTS",
@@ -306,6 +308,13 @@ P_RESOLUTION: Final[float] = 2.0 * LOGIT_CLIP
 #: interior in part of the design are fitted on each side of the strike onset
 #: (models.surrogate.build, :data:`DELTA_V_PIECES_KMH` for the measurements).
 HEAD_CLEARANCE: Final[str] = "head_clearance_mm"
+
+#: Accuracy targets of the surrogates against direct LPM runs (issue 5): the
+#: median relative error of every measure, per family, below
+#: MEDIAN_ERROR_TARGET, and the ISS15+ decision agreement (P(ISS >= 15) on the
+#: same side of 0.5) above AGREEMENT_TARGET, per family and pooled.
+MEDIAN_ERROR_TARGET: Final[float] = 0.05
+AGREEMENT_TARGET: Final[float] = 0.97
 
 #: Largest ISS (AIS 5 in three regions, or any AIS 6).
 ISS_MAX: Final[float] = 75.0

@@ -187,3 +187,29 @@ def test_build_surrogates_receives_its_own_options(capsys: pytest.CaptureFixture
         cli.main(["build-surrogates", "--help"])
     assert exc.value.code == 0
     assert "--family" in capsys.readouterr().out
+
+
+def test_validate_surrogates_receives_its_own_options(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``validate-surrogates`` hands its options to the validator: one family, a few
+    points, another output directory; an unknown family is exit code 2."""
+    rc = cli.main(
+        [
+            "validate-surrogates",
+            "--family",
+            "rear__female_5th__unbelted__airbag_any",
+            "--n",
+            "12",
+            "--out",
+            str(tmp_path),
+        ]
+    )
+    assert rc in (0, 1)
+    assert "[1/1] rear__female_5th__unbelted__airbag_any: 12 runs" in capsys.readouterr().err
+    assert (tmp_path / "VALIDATION.md").is_file()
+    assert cli.main(["validate-surrogates", "--family", "no_such_family"]) == 2
+    with pytest.raises(SystemExit) as exc:
+        cli.main(["validate-surrogates", "--help"])
+    assert exc.value.code == 0
+    assert "--seed" in capsys.readouterr().out

@@ -1,0 +1,489 @@
+"""Fresh validation of the shipped surrogates: new uniform LPM runs, never used to build them.
+
+The build's own held-out set (150 uniform points per family, ``REPORT.md``
+Table B) was looked at while the design sizes, pieces, splits and the Kriging
+were chosen (the measurements in :data:`models.surrogate.spec.DELTA_V_PIECES_KMH`),
+so its figures carry some selection. This module draws a second, larger set
+from a seed that no build decision has seen (:data:`FRESH_SEED`), runs the
+direct LPM there and scores the library against it with the same measures as
+the build (:func:`models.surrogate.build.heldout_scores`), plus the ISS15+
+agreement at the service's own decision threshold
+(:func:`models.surrogate.report.service_raw_threshold`). With 600 points a
+family's median relative error has a sampling error of about 0.3 points
+(against about 0.5 with 150).
+
+The LPM runs are the long part (about 2-3 s per family on one core); they
+depend only on the LPM code, the parameter set, the seed and the point count,
+so they are cached per family (``<out>/.validation_cache/``, not shipped) and a
+rerun after an interruption, or after a surrogate rebuild with unchanged LPM,
+reuses them. The library is scored afresh on every run (milliseconds).
+
+Command line: ``aacn-triage validate-surrogates [--n N] [--seed S] [--out DIR]``
+writes ``VALIDATION.md``, ``validation.json`` and ``validation.png`` next to
+the artifacts (default ``models/surrogate/``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import zlib
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Final
+
+import numpy as np
+import numpy.typing as npt
+
+from models.impact_mode import ImpactMode
+from models.surrogate.evaluate import SurrogateFamily, SurrogateLibrary
+from models.surrogate.spec import (
+    AGREEMENT_TARGET,
+    FAMILIES,
+    MEASURE_FLOORS,
+    MEDIAN_ERROR_TARGET,
+    MODE_OUTPUTS,
+    FamilySpec,
+)
+from models.surrogate.store import read_artifact, write_artifact, write_json
+
+__all__ = [
+    "AGREEMENT_TARGET",
+    "FRESH_N",
+    "FRESH_SEED",
+    "MEDIAN_ERROR_TARGET",
+    "FreshRuns",
+    "fresh_points",
+    "fresh_runs",
+    "main",
+    "score_family",
+    "validate_library",
+    "write_validation",
+]
+
+FloatArray = npt.NDArray[np.float64]
+
+#: Seed of the fresh validation points (the date they were first drawn). No
+#: build or design decision was taken on these points; keep it that way (a new
+#: seed for a new round of decisions).
+FRESH_SEED: Final[int] = 20261203
+#: Fresh uniform points per family.
+FRESH_N: Final[int] = 600
+
+_CACHE_DIR: Final[str] = ".validation_cache"
+
+
+@dataclass(frozen=True)
+class FreshRuns:
+    """Direct LPM runs at the fresh points of one family.
+
+    Attributes
+    ----------
+    family : str
+    x : ndarray, shape (n, 5)
+        Raw inputs (columns of :data:`models.surrogate.spec.INPUT_NAMES`).
+    y : ndarray, shape (n, n_outputs)
+        LPM values of the family's outputs (NaN where the run failed).
+    seed : int
+    lpm_code_sha256, parameter_set_sha256 : str
+        What produced `y`.
+    """
+
+    family: str
+    x: FloatArray
+    y: FloatArray
+    seed: int
+    lpm_code_sha256: str
+    parameter_set_sha256: str
+
+
+def fresh_points(spec: FamilySpec, n: int, seed: int = FRESH_SEED) -> FloatArray:
+    """Uniform random points over a family's whole design box, shape (n, 5).
+
+    The stream is seeded by the seed and the family's name (CRC-32), so a
+    family's points do not depend on which other families are validated.
+    """
+    lo = np.array([r[0] for r in spec.ranges], dtype=np.float64)
+    hi = np.array([r[1] for r in spec.ranges], dtype=np.float64)
+    rng = np.random.default_rng([int(seed), zlib.crc32(spec.name.encode())])
+    return np.asarray(lo + (hi - lo) * rng.random((int(n), lo.size)), dtype=np.float64)
+
+
+def _checksums() -> tuple[str, str]:
+    from models.lpm.fingerprint import lpm_code_sha256
+    from models.lpm.params import load_parameter_set
+
+    return lpm_code_sha256(), load_parameter_set().sha256
+
+
+def fresh_runs(
+    spec: FamilySpec, n: int, seed: int = FRESH_SEED, cache_dir: Path | None = None
+) -> tuple[FreshRuns, bool]:
+    """The LPM runs at a family's fresh points, from the cache when it matches.
+
+    Returns
+    -------
+    (FreshRuns, bool)
+        The runs and whether they came from the cache.
+    """
+    from models.surrogate.build import lpm_runs
+
+    code_sha, params_sha = _checksums()
+    path = None if cache_dir is None else cache_dir / f"{spec.name}.npz"
+    if path is not None and path.is_file():
+        arrays, meta = read_artifact(path)
+        if (
+            meta.get("seed") == int(seed)
+            and meta.get("n") == int(n)
+            and meta.get("lpm_code_sha256") == code_sha
+            and meta.get("parameter_set_sha256") == params_sha
+        ):
+            return FreshRuns(spec.name, arrays["x"], arrays["y"], seed, code_sha, params_sha), True
+    x = fresh_points(spec, n, seed)
+    y = lpm_runs(spec, x).y
+    if path is not None:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        meta_out = {
+            "family": spec.name,
+            "seed": int(seed),
+            "n": int(n),
+            "lpm_code_sha256": code_sha,
+            "parameter_set_sha256": params_sha,
+        }
+        write_artifact(path, {"x": x, "y": y}, meta_out)
+    return FreshRuns(spec.name, x, y, seed, code_sha, params_sha), False
+
+
+def score_family(spec: FamilySpec, fam: SurrogateFamily, runs: FreshRuns) -> dict[str, Any]:
+    """The build's held-out scores on the fresh runs, plus the service-threshold agreement.
+
+    Returns
+    -------
+    dict
+        :func:`models.surrogate.build.heldout_scores` (``n``, per measure the
+        median and 90th percentile relative error, ``decision_agreement_p``,
+        ...), ``decision_agreement_service`` (P on both sides of the service's
+        uncorrected threshold for the family) and ``worst_measure`` /
+        ``worst_median_rel_error``.
+    """
+    from models.surrogate.build import heldout_scores
+    from models.surrogate.report import service_raw_threshold
+
+    pred = fam.predict(runs.x)
+    scores = heldout_scores(spec, runs.y, pred)
+    ok = np.all(np.isfinite(runs.y), axis=1)
+    k = spec.outputs.index("p_iss15")
+    thr = service_raw_threshold(spec.name, spec.outputs)
+    scores["decision_agreement_service"] = float(
+        np.mean((runs.y[ok, k] >= thr) == (pred[ok, k] >= thr))
+    )
+    yv, pv = runs.y[ok], pred[ok]
+    for j, o in enumerate(spec.outputs):
+        if "median_rel_error" not in scores.get(o, {}):
+            continue
+        # where the error sits: by quartile of the LPM value
+        rel = np.abs(pv[:, j] - yv[:, j]) / np.maximum(np.abs(yv[:, j]), 1e-12)
+        bounds = np.quantile(yv[:, j], [0.25, 0.5, 0.75])
+        bins = np.searchsorted(bounds, yv[:, j], side="right")
+        # values below the fit floor are zero to the fitted scale (spec.MEASURE_FLOORS)
+        above = yv[:, j] >= MEASURE_FLOORS[o]
+        scores[o]["n_above_floor"] = int(above.sum())
+        scores[o]["median_rel_error_above_floor"] = (
+            float(np.median(rel[above])) if np.any(above) else None
+        )
+        scores[o]["quartile_bounds"] = [float(b) for b in bounds]
+        scores[o]["quartile_median_rel_error"] = [
+            float(np.median(rel[bins == q])) if np.any(bins == q) else None for q in range(4)
+        ]
+    medians = {
+        o: float(scores[o]["median_rel_error"])
+        for o in spec.outputs
+        if "median_rel_error" in scores.get(o, {})
+    }
+    worst = max(medians, key=lambda o: medians[o])
+    scores["worst_measure"] = worst
+    scores["worst_median_rel_error"] = medians[worst]
+    return scores
+
+
+def _pooled(
+    specs: Sequence[FamilySpec], lib: SurrogateLibrary, runs: Mapping[str, FreshRuns]
+) -> dict[str, float]:
+    rel: dict[str, list[float]] = {}
+    agree: list[bool] = []
+    for spec in specs:
+        r = runs[spec.name]
+        ok = np.all(np.isfinite(r.y), axis=1)
+        y = r.y[ok]
+        pred = lib.families()[spec.name].predict(r.x[ok])
+        for j, o in enumerate(spec.outputs):
+            if o == "p_iss15":
+                agree.extend(((y[:, j] >= 0.5) == (pred[:, j] >= 0.5)).tolist())
+            elif o != "iss":
+                e = np.abs(pred[:, j] - y[:, j]) / np.maximum(np.abs(y[:, j]), 1e-12)
+                rel.setdefault(o, []).extend(e.tolist())
+    out = {f"{o}_median_rel_error": float(np.median(v)) for o, v in sorted(rel.items())}
+    out["decision_agreement_p"] = float(np.mean(agree))
+    return out
+
+
+def validate_library(
+    lib: SurrogateLibrary,
+    *,
+    n: int = FRESH_N,
+    seed: int = FRESH_SEED,
+    families: Sequence[str] | None = None,
+    cache_dir: Path | None = None,
+    progress: Callable[[str], None] | None = None,
+) -> dict[str, Any]:
+    """Score `lib` on fresh direct LPM runs, family by family.
+
+    Parameters
+    ----------
+    lib : SurrogateLibrary
+    n : int, optional
+        Points per family.
+    seed : int, optional
+    families : sequence of str, optional
+        Default: every family of :data:`models.surrogate.spec.FAMILIES` in `lib`.
+    cache_dir : Path, optional
+        Where the LPM runs are cached (resume); None: not cached.
+    progress : callable, optional
+        Called with one line per family.
+
+    Returns
+    -------
+    dict
+        ``library_sha256``, ``lpm_code_sha256``, ``parameter_set_sha256``,
+        ``seed``, ``n``, ``families`` (per family :func:`score_family`),
+        ``pooled`` (median relative error per measure, ISS15+ agreement) and
+        ``targets_met`` (every family's every measure under
+        :data:`MEDIAN_ERROR_TARGET`, every family's and the pooled agreement
+        over :data:`AGREEMENT_TARGET`).
+
+    Raises
+    ------
+    KeyError
+        When a named family is not in `lib`.
+    """
+    names = list(families) if families is not None else [s.name for s in FAMILIES]
+    by_name = {s.name: s for s in FAMILIES}
+    unknown = [nm for nm in names if nm not in by_name]
+    if unknown:
+        raise KeyError(f"unknown family {unknown}; known: {', '.join(by_name)}")
+    specs = [by_name[nm] for nm in names]
+    for spec in specs:
+        if spec.name not in lib.families():
+            raise KeyError(f"family {spec.name!r} is not in the surrogate library")
+    runs: dict[str, FreshRuns] = {}
+    per: dict[str, Any] = {}
+    for i, spec in enumerate(specs, 1):
+        r, cached = fresh_runs(spec, n, seed, cache_dir)
+        runs[spec.name] = r
+        scores = score_family(spec, lib.families()[spec.name], r)
+        per[spec.name] = scores
+        if progress is not None:
+            progress(
+                f"[{i}/{len(specs)}] {spec.name}: {scores['n']} runs"
+                f"{' (cached)' if cached else ''}; worst median {scores['worst_measure']} "
+                f"{100 * scores['worst_median_rel_error']:.2f} %, ISS15+ agreement "
+                f"{100 * scores['decision_agreement_p']:.1f} %"
+            )
+    pooled = _pooled(specs, lib, runs)
+    met = (
+        all(s["worst_median_rel_error"] < MEDIAN_ERROR_TARGET for s in per.values())
+        and all(s["decision_agreement_p"] > AGREEMENT_TARGET for s in per.values())
+        and pooled["decision_agreement_p"] > AGREEMENT_TARGET
+    )
+    code_sha, params_sha = _checksums()
+    return {
+        "library_sha256": lib.sha256,
+        "library_version": lib.version,
+        "lpm_code_sha256": code_sha,
+        "parameter_set_sha256": params_sha,
+        "seed": int(seed),
+        "n": int(n),
+        "families": per,
+        "pooled": pooled,
+        "targets_met": bool(met),
+    }
+
+
+def _plot(result: Mapping[str, Any], path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    names = list(result["families"])
+    worst = [100 * result["families"][nm]["worst_median_rel_error"] for nm in names]
+    agree = [100 * result["families"][nm]["decision_agreement_p"] for nm in names]
+    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(12, 0.32 * len(names) + 1.5), sharey=True)
+    yy = np.arange(len(names))
+    ax1.barh(yy, worst, color="tab:blue", label="all runs")
+    floor_worst = [
+        100
+        * max(
+            v["median_rel_error_above_floor"]
+            for v in result["families"][nm].values()
+            if isinstance(v, dict) and v.get("median_rel_error_above_floor") is not None
+        )
+        for nm in names
+    ]
+    ax1.plot(floor_worst, yy, "k|", ms=12, mew=2, label="runs at or above the fit floor")
+    ax1.axvline(100 * MEDIAN_ERROR_TARGET, color="tab:red", ls="--", label="target 5 %")
+    ax1.set_xlabel("worst measure's median relative error, %")
+    ax1.set_yticks(yy, [nm.replace("__", " ") for nm in names], fontsize=7)
+    ax1.invert_yaxis()
+    ax1.legend(loc="lower right", fontsize=8)
+    ax2.barh(yy, agree, color="tab:green")
+    ax2.axvline(100 * AGREEMENT_TARGET, color="tab:red", ls="--", label="target 97 %")
+    ax2.set_xlim(90.0, 100.5)
+    ax2.set_xlabel("ISS15+ agreement (P >= 0.5), %")
+    ax2.legend(loc="lower left", fontsize=8)
+    fig.suptitle(
+        f"Surrogates vs {result['n']} fresh direct LPM runs per family (seed {result['seed']})"
+    )
+    fig.tight_layout()
+    fig.savefig(path, dpi=110)
+    plt.close(fig)
+
+
+def write_validation(result: Mapping[str, Any], out_dir: Path) -> Path:
+    """Write ``validation.json``, ``validation.png`` and ``VALIDATION.md`` into `out_dir`."""
+    out_dir.mkdir(parents=True, exist_ok=True)
+    write_json(out_dir / "validation.json", result)
+    _plot(result, out_dir / "validation.png")
+    fams: Mapping[str, Any] = result["families"]
+    lines = [
+        "# Fresh validation of the surrogates",
+        "",
+        "Written by `aacn-triage validate-surrogates` (`models/surrogate/validate.py`); "
+        "do not edit.",
+        "",
+        f"Library `{result['library_version']}` (manifest sha256 "
+        f"`{result['library_sha256'][:12]}...`), LPM code `{result['lpm_code_sha256'][:12]}...`, "
+        f"parameter set `{result['parameter_set_sha256'][:12]}...`.",
+        f"{result['n']} uniform random points per family over its whole design box, seed "
+        f"{result['seed']}: a set no build decision has seen (the build's own held-out set, "
+        "150 points, is REPORT.md Table B). Median relative error per measure (ISS15+ "
+        "agreement: the LPM's and the surrogate's P(ISS >= 15) on the same side of 0.5; "
+        "service: of the service's decision threshold, zero-load-corrected 0.10 frontal and "
+        "rear, 0.05 side).",
+        "",
+        "![validation](validation.png)",
+        "",
+        "| family | n | HIC15 | Nij | chest defl. | chest VC | chest 3 ms | CTI | abdomen VC "
+        "| worst | ISS15+ agreement | at the service threshold |",
+        "|---|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    # every measure of any mode, in the near-side order (the widest output list)
+    cols = tuple(o for o in MODE_OUTPUTS[ImpactMode.NEAR_SIDE] if o not in ("p_iss15", "iss"))
+    for nm, s in fams.items():
+        cells = [f"{100 * s[c]['median_rel_error']:.2f} %" if c in s else "-" for c in cols]
+        lines.append(
+            f"| {nm} | {s['n']} | "
+            + " | ".join(cells)
+            + f" | {s['worst_measure']} {100 * s['worst_median_rel_error']:.2f} % "
+            f"| {100 * s['decision_agreement_p']:.1f} % "
+            f"| {100 * s['decision_agreement_service']:.1f} % |"
+        )
+    misses = [
+        (nm, o, s[o])
+        for nm, s in fams.items()
+        for o in cols
+        if o in s and s[o]["median_rel_error"] >= MEDIAN_ERROR_TARGET
+    ]
+    if misses:
+        lines += ["", "Where the misses sit, by quartile of the LPM value:", ""]
+        for nm, o, m in misses:
+            b = m["quartile_bounds"]
+            q = m["quartile_median_rel_error"]
+            qs = ["-" if v is None else f"{100 * v:.1f} %" for v in q]
+            af = m["median_rel_error_above_floor"]
+            lines.append(
+                f"- {nm}, {o}: median relative error {100 * m['median_rel_error']:.2f} %; "
+                f"LPM value <= {b[0]:.3g}: {qs[0]}, {b[0]:.3g}-{b[1]:.3g}: {qs[1]}, "
+                f"{b[1]:.3g}-{b[2]:.3g}: {qs[2]}, > {b[2]:.3g}: {qs[3]}. Over the "
+                f"{m['n_above_floor']} runs at or above the fit floor "
+                f"({MEASURE_FLOORS[o]:g}, below which a value is zero to the fit): "
+                + ("-" if af is None else f"{100 * af:.2f} %")
+                + "."
+            )
+    pooled = result["pooled"]
+    lines += [
+        "",
+        "Pooled over the families: "
+        + ", ".join(
+            f"{k.removesuffix('_median_rel_error')} {100 * v:.2f} %"
+            for k, v in pooled.items()
+            if k.endswith("_median_rel_error")
+        )
+        + f"; ISS15+ agreement {100 * pooled['decision_agreement_p']:.2f} %.",
+        "",
+        "Targets (issue 5: median relative error of every measure under "
+        f"{100 * MEDIAN_ERROR_TARGET:.0f} % per family, ISS15+ agreement over "
+        f"{100 * AGREEMENT_TARGET:.0f} % per family and pooled): "
+        + ("**met**." if result["targets_met"] else "**not met**."),
+        "",
+    ]
+    path = out_dir / "VALIDATION.md"
+    path.write_text("\n".join(lines))
+    return path
+
+
+def _stderr_line(line: str) -> None:
+    sys.stderr.write(line + "\n")
+    sys.stderr.flush()
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Command line: validate the shipped (or another) surrogate library on fresh LPM runs.
+
+    Returns
+    -------
+    int
+        0 when the targets are met, 1 when not, 2 on an unknown family or an
+        unloadable library.
+    """
+    from models.surrogate.evaluate import default_artifact_dir
+
+    ap = argparse.ArgumentParser(
+        prog="aacn-triage validate-surrogates",
+        description="Score the surrogates on fresh direct LPM runs (resumable).",
+    )
+    ap.add_argument("--n", type=int, default=FRESH_N, help=f"points per family ({FRESH_N})")
+    ap.add_argument("--seed", type=int, default=FRESH_SEED, help=f"({FRESH_SEED})")
+    ap.add_argument("--family", action="append", default=None, help="only this family (repeatable)")
+    ap.add_argument("--artifacts", type=Path, default=None, help="artifact directory (shipped)")
+    ap.add_argument(
+        "--out", type=Path, default=None, help="report directory (the artifacts' parent)"
+    )
+    ap.add_argument("--no-cache", action="store_true", help="rerun every LPM case")
+    args = ap.parse_args(list(argv) if argv is not None else None)
+    art: Path = args.artifacts or default_artifact_dir()
+    out: Path = args.out or art.parent
+    try:
+        lib = SurrogateLibrary.load(art, require_all=args.family is None)
+    except ValueError as exc:
+        sys.stderr.write(f"cannot load the surrogates: {exc}\n")
+        return 2
+    stale = lib.stale_reason()
+    if stale is not None:
+        sys.stderr.write(f"warning: {stale}\n")
+    try:
+        result = validate_library(
+            lib,
+            n=args.n,
+            seed=args.seed,
+            families=args.family,
+            cache_dir=None if args.no_cache else out / _CACHE_DIR,
+            progress=_stderr_line,
+        )
+    except KeyError as exc:
+        sys.stderr.write(f"{exc.args[0]}\n")
+        return 2
+    path = write_validation(result, out)
+    sys.stderr.write(f"wrote {path}; targets {'met' if result['targets_met'] else 'NOT met'}\n")
+    return 0 if result["targets_met"] else 1
