@@ -102,12 +102,15 @@ def test_the_kriging_is_fitted_on_at_most_kriging_max_runs(
     shipped_library: SurrogateLibrary,
 ) -> None:
     """The request-path kernel is (sensor samples x Kriging runs): the runs are the
-    first finite design rows, at most BuildConfig.kriging_max_runs of them."""
+    first finite design rows, at most the ``kriging_max_runs`` each artifact's
+    build recorded (its ``config``), and the shipped builds are default ones."""
     from models.surrogate.build import default_config
-    from models.surrogate.spec import DELTA_V_PIECES_KMH
 
-    cap = default_config().kriging_max_runs
-    for name in shipped_library.families():
+    for name, fam in shipped_library.families().items():
+        cap = int(fam.meta["config"]["kriging_max_runs"])
+        assert cap == default_config().kriging_max_runs, name
+        edges = fam.meta["config"]["delta_v_pieces_kmh"]
+        assert tuple(edges) == default_config().delta_v_pieces_kmh, name
         arrays = _artifact_arrays(name)
         k = 0
         while f"piece{k}/design_x" in arrays:
@@ -116,7 +119,7 @@ def test_the_kriging_is_fitted_on_at_most_kriging_max_runs(
             n_k = arrays[f"piece{k}/kriging/train_u"].shape[0]
             assert n_k == min(finite, cap), (name, k, n_k, finite)
             k += 1
-        assert k == len(DELTA_V_PIECES_KMH) - 1, name
+        assert k == len(edges) - 1, name
 
 
 def test_kriging_lowers_the_pooled_heldout_error(shipped_library: SurrogateLibrary) -> None:
