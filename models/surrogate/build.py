@@ -806,7 +806,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     ``--force`` rebuilds all; ``--workers N`` processes (default: CPU count);
     ``--out DIR`` (default: the shipped artifact directory); ``--n-train``,
     ``--n-holdout``, ``--n-boot``, ``--seed`` override the configuration;
-    ``--no-report`` skips REPORT.md and the plots.
+    ``--no-report`` skips REPORT.md, the plots and the fresh validation
+    (``VALIDATION.md``, :mod:`models.surrogate.validate`, run when every family
+    is present).
 
     Returns
     -------
@@ -917,6 +919,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
         t_rep = time.perf_counter()
         write_report(directory, directory.parent)
+        _validate_after_build(directory)
         if results:
             timings["report_seconds"] = time.perf_counter() - t_rep
             write_json(tpath, timings)
@@ -924,6 +927,19 @@ def main(argv: Sequence[str] | None = None) -> int:
         f"built {len(results)} families in {total:.1f} s; manifest {manifest['version']}\n"
     )
     return 0
+
+
+def _validate_after_build(directory: Path) -> None:
+    """Rerun the fresh validation (VALIDATION.md) when the library is complete."""
+    from models.surrogate.evaluate import SurrogateLibrary
+    from models.surrogate.validate import main as validate_main
+
+    try:
+        SurrogateLibrary.load(directory)
+    except ValueError as exc:
+        sys.stderr.write(f"fresh validation skipped: {exc}\n")
+        return
+    validate_main(["--artifacts", str(directory)])
 
 
 def _worker_init_env() -> None:

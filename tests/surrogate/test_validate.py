@@ -164,3 +164,14 @@ def test_shipped_validation_above_the_fit_floor() -> None:
     assert len(above) == sum(len(s.outputs) - 2 for s in FAMILIES)
     assert all(e < MEDIAN_ERROR_TARGET for e in above.values()), above
     assert result["pooled"]["decision_agreement_p"] > AGREEMENT_TARGET
+
+
+def test_a_partial_build_skips_the_fresh_validation(
+    tiny_library_dir: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The build reruns the validation only for a complete library (one family: skipped)."""
+    from models.surrogate.build import _validate_after_build
+
+    _validate_after_build(tiny_library_dir)
+    assert "fresh validation skipped: surrogate families missing" in capsys.readouterr().err
+    assert not (tiny_library_dir.parent / "VALIDATION.md").exists()
