@@ -130,17 +130,16 @@ def fresh_runs(
     from models.surrogate.build import lpm_runs
 
     code_sha, params_sha = _checksums()
+    x = fresh_points(spec, n, seed)
     path = None if cache_dir is None else cache_dir / f"{spec.name}.npz"
     if path is not None and path.is_file():
         arrays, meta = read_artifact(path)
         if (
-            meta.get("seed") == int(seed)
-            and meta.get("n") == int(n)
-            and meta.get("lpm_code_sha256") == code_sha
+            meta.get("lpm_code_sha256") == code_sha
             and meta.get("parameter_set_sha256") == params_sha
+            and np.array_equal(arrays["x"], x)  # the same seed, size and design box
         ):
-            return FreshRuns(spec.name, arrays["x"], arrays["y"], seed, code_sha, params_sha), True
-    x = fresh_points(spec, n, seed)
+            return FreshRuns(spec.name, x, arrays["y"], seed, code_sha, params_sha), True
     y = lpm_runs(spec, x).y
     if path is not None:
         path.parent.mkdir(parents=True, exist_ok=True)
@@ -404,7 +403,7 @@ def write_validation(result: Mapping[str, Any], out_dir: Path) -> Path:
             af = m["median_rel_error_above_floor"]
             lines.append(
                 f"- {nm}, {o}: median relative error {100 * m['median_rel_error']:.2f} %; "
-                f"LPM value <= {b[0]:.3g}: {qs[0]}, {b[0]:.3g}-{b[1]:.3g}: {qs[1]}, "
+                f"LPM value below {b[0]:.3g}: {qs[0]}, {b[0]:.3g}-{b[1]:.3g}: {qs[1]}, "
                 f"{b[1]:.3g}-{b[2]:.3g}: {qs[2]}, > {b[2]:.3g}: {qs[3]}. Over the "
                 f"{m['n_above_floor']} runs at or above the fit floor "
                 f"({MEASURE_FLOORS[o]:g}, below which a value is zero to the fit): "

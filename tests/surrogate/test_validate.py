@@ -175,3 +175,20 @@ def test_a_partial_build_skips_the_fresh_validation(
     _validate_after_build(tiny_library_dir)
     assert "fresh validation skipped: surrogate families missing" in capsys.readouterr().err
     assert not (tiny_library_dir.parent / "VALIDATION.md").exists()
+
+
+def test_cached_runs_are_not_reused_for_another_design_box(tmp_path: Path) -> None:
+    from dataclasses import replace
+
+    from models.surrogate.validate import fresh_runs
+
+    spec = _spec(CHEAP)
+    first, cached = fresh_runs(spec, 8, cache_dir=tmp_path)
+    assert not cached
+    again, cached = fresh_runs(spec, 8, cache_dir=tmp_path)
+    assert cached
+    np.testing.assert_array_equal(again.y, first.y)
+    narrower = replace(spec, ranges=((20.0, 40.0), *spec.ranges[1:]))
+    other, cached = fresh_runs(narrower, 8, cache_dir=tmp_path)
+    assert not cached
+    assert np.all(other.x[:, 0] <= 40.0)
