@@ -454,13 +454,25 @@ def main(argv: Sequence[str] | None = None) -> int:
     )
     ap.add_argument("--n", type=int, default=FRESH_N, help=f"points per family ({FRESH_N})")
     ap.add_argument("--seed", type=int, default=FRESH_SEED, help=f"({FRESH_SEED})")
-    ap.add_argument("--family", action="append", default=None, help="only this family (repeatable)")
+    ap.add_argument(
+        "--family", action="append", default=None, help="only this family (repeatable; with --out)"
+    )
     ap.add_argument("--artifacts", type=Path, default=None, help="artifact directory (shipped)")
     ap.add_argument(
         "--out", type=Path, default=None, help="report directory (the artifacts' parent)"
     )
     ap.add_argument("--no-cache", action="store_true", help="rerun every LPM case")
     args = ap.parse_args(list(argv) if argv is not None else None)
+    if args.family is not None:
+        known = {s.name for s in FAMILIES}
+        unknown = [f for f in args.family if f not in known]
+        if unknown:
+            sys.stderr.write(f"unknown family {unknown}; known: {', '.join(sorted(known))}\n")
+            return 2
+        if args.out is None:
+            # the shipped VALIDATION.md covers every family
+            sys.stderr.write("--family needs --out DIR (a partial validation)\n")
+            return 2
     art: Path = args.artifacts or default_artifact_dir()
     out: Path = args.out or art.parent
     try:

@@ -209,6 +209,11 @@ def test_validate_surrogates_receives_its_own_options(
     assert "[1/1] rear__female_5th__unbelted__airbag_any: 12 runs" in capsys.readouterr().err
     assert (tmp_path / "VALIDATION.md").is_file()
     assert cli.main(["validate-surrogates", "--family", "no_such_family"]) == 2
+    assert "unknown family ['no_such_family']" in capsys.readouterr().err
+    # a partial validation does not overwrite the shipped VALIDATION.md
+    rear = "rear__male_50th__belted__airbag_any"
+    assert cli.main(["validate-surrogates", "--family", rear]) == 2
+    assert "--family needs --out DIR" in capsys.readouterr().err
     with pytest.raises(SystemExit) as exc:
         cli.main(["validate-surrogates", "--help"])
     assert exc.value.code == 0
