@@ -100,7 +100,10 @@ def _random_case(
 
 
 def coverage_check(
-    lib: SurrogateLibrary, n_cases: int, seed: int = COVERAGE_SEED
+    lib: SurrogateLibrary,
+    n_cases: int,
+    seed: int = COVERAGE_SEED,
+    families: Sequence[str] | None = None,
 ) -> list[dict[str, Any]]:
     """Does the 95% interval of P(ISS >= 15) contain the Monte Carlo value?
 
@@ -109,6 +112,13 @@ def coverage_check(
     readings (clipped to the domain). The Monte Carlo value is the mean
     P(ISS >= 15) of direct LPM runs at the fixed sensor sample points; it counts
     as inside when within :data:`P_RESOLUTION` of the interval.
+
+    Parameters
+    ----------
+    lib : SurrogateLibrary
+    n_cases, seed : int
+    families : sequence of str, optional
+        Draw the cases from these families only (default: every family of `lib`).
 
     Returns
     -------
@@ -123,7 +133,7 @@ def coverage_check(
     )
 
     specs = {s.name: s for s in FAMILIES}
-    names = [n for n in lib.family_names if n in specs]
+    names = [n for n in lib.family_names if n in specs and (families is None or n in families)]
     rng = np.random.default_rng(seed)
     rows: list[dict[str, Any]] = []
     for _ in range(n_cases):

@@ -50,6 +50,8 @@ from models.surrogate.store import read_artifact, write_artifact, write_json
 
 __all__ = [
     "AGREEMENT_TARGET",
+    "COVERAGE_TARGET",
+    "FRESH_COVERAGE_CASES",
     "FRESH_N",
     "FRESH_SEED",
     "MEDIAN_ERROR_TARGET",
@@ -70,6 +72,11 @@ FloatArray = npt.NDArray[np.float64]
 FRESH_SEED: Final[int] = 20261203
 #: Fresh uniform points per family.
 FRESH_N: Final[int] = 600
+#: Fresh cases of the interval checks (as many as REPORT.md Table D's).
+FRESH_COVERAGE_CASES: Final[int] = 120
+#: Issue 5 target: the 95 % interval of P(ISS >= 15) holds the direct-LPM Monte
+#: Carlo value in at least this share of the cases.
+COVERAGE_TARGET: Final[float] = 0.90
 
 _CACHE_DIR: Final[str] = ".validation_cache"
 
@@ -235,6 +242,7 @@ def validate_library(
     families: Sequence[str] | None = None,
     cache_dir: Path | None = None,
     progress: Callable[[str], None] | None = None,
+    coverage_cases: int = FRESH_COVERAGE_CASES,
 ) -> dict[str, Any]:
     """Score `lib` on fresh direct LPM runs, family by family.
 
@@ -250,16 +258,24 @@ def validate_library(
         Where the LPM runs are cached (resume); None: not cached.
     progress : callable, optional
         Called with one line per family.
+    coverage_cases : int, optional
+        Fresh cases of the interval checks (:func:`models.surrogate.report.coverage_check`
+        for P(ISS >= 15), :func:`~models.surrogate.report.measure_coverage_check` for
+        the measures and ISS), drawn from the validated families with `seed`; 0
+        skips them. Not cached (about 0.5 s a case).
 
     Returns
     -------
     dict
         ``library_sha256``, ``lpm_code_sha256``, ``parameter_set_sha256``,
         ``seed``, ``n``, ``families`` (per family :func:`score_family`),
-        ``pooled`` (median relative error per measure, ISS15+ agreement) and
-        ``targets_met`` (every family's every measure under
+        ``pooled`` (median relative error per measure, ISS15+ agreement),
+        ``coverage`` (the interval checks: cases, P(ISS >= 15) hits and share,
+        mean share of LPM outcomes inside each measure's interval; None when
+        skipped) and ``targets_met`` (every family's every measure under
         :data:`MEDIAN_ERROR_TARGET`, every family's and the pooled agreement
-        over :data:`AGREEMENT_TARGET`).
+        over :data:`AGREEMENT_TARGET`, the P(ISS >= 15) interval coverage at
+        least :data:`COVERAGE_TARGET`).
 
     Raises
     ------
@@ -290,10 +306,31 @@ def validate_library(
                 f"{100 * scores['decision_agreement_p']:.1f} %"
             )
     pooled = _pooled(specs, lib, runs)
+    coverage: dict[str, Any] | None = None
+    if coverage_cases > 0:
+        from models.surrogate.report import coverage_check, measure_coverage_check
+
+        if progress is not None:
+            progress(f"interval checks on {coverage_cases} fresh cases ...")
+        rows = coverage_check(lib, coverage_cases, seed=seed, families=names)
+        fams = {nm: lib.families()[nm] for nm in names}
+        shares = measure_coverage_check(fams, coverage_cases, seed=seed)
+        hits = sum(bool(r["hit"]) for r in rows)
+        coverage = {
+            "cases": int(coverage_cases),
+            "p_iss15_hits": int(hits),
+            "p_iss15_share": hits / coverage_cases,
+            "measure_mean_share": {k: float(np.mean(v)) for k, v in sorted(shares.items())},
+        }
+        if progress is not None:
+            progress(
+                f"P(ISS >= 15) interval holds the Monte Carlo value in {hits}/{coverage_cases}"
+            )
     met = (
         all(s["worst_median_rel_error"] < MEDIAN_ERROR_TARGET for s in per.values())
         and all(s["decision_agreement_p"] > AGREEMENT_TARGET for s in per.values())
         and pooled["decision_agreement_p"] > AGREEMENT_TARGET
+        and (coverage is None or coverage["p_iss15_share"] >= COVERAGE_TARGET)
     )
     code_sha, params_sha = _checksums()
     return {
@@ -305,6 +342,7 @@ def validate_library(
         "n": int(n),
         "families": per,
         "pooled": pooled,
+        "coverage": coverage,
         "targets_met": bool(met),
     }
 
@@ -410,6 +448,20 @@ def write_validation(result: Mapping[str, Any], out_dir: Path) -> Path:
                 + ("-" if af is None else f"{100 * af:.2f} %")
                 + "."
             )
+    cov = result.get("coverage")
+    if cov is not None:
+        lines += [
+            "",
+            f"Intervals, on {cov['cases']} fresh cases (random family and in-domain readings, "
+            "the default sensor errors; `models/surrogate/report.py` checks of Table C and D "
+            f"with seed {result['seed']}): the 95 % interval of P(ISS >= 15) holds the mean of "
+            "direct LPM runs over the sensor distribution in "
+            f"{cov['p_iss15_hits']}/{cov['cases']} cases (target "
+            f"{100 * COVERAGE_TARGET:.0f} %); mean share of direct LPM outcomes at "
+            "independently drawn true sensor values inside the served interval: "
+            + ", ".join(f"{k} {100 * v:.1f} %" for k, v in cov["measure_mean_share"].items())
+            + ".",
+        ]
     pooled = result["pooled"]
     lines += [
         "",
@@ -423,7 +475,8 @@ def write_validation(result: Mapping[str, Any], out_dir: Path) -> Path:
         "",
         "Targets (issue 5: median relative error of every measure under "
         f"{100 * MEDIAN_ERROR_TARGET:.0f} % per family, ISS15+ agreement over "
-        f"{100 * AGREEMENT_TARGET:.0f} % per family and pooled): "
+        f"{100 * AGREEMENT_TARGET:.0f} % per family and pooled, P(ISS >= 15) interval "
+        f"coverage at least {100 * COVERAGE_TARGET:.0f} %): "
         + ("**met**." if result["targets_met"] else "**not met**."),
         "",
     ]
@@ -462,6 +515,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         "--out", type=Path, default=None, help="report directory (the artifacts' parent)"
     )
     ap.add_argument("--no-cache", action="store_true", help="rerun every LPM case")
+    ap.add_argument(
+        "--coverage-cases",
+        type=int,
+        default=FRESH_COVERAGE_CASES,
+        help=f"fresh cases of the interval checks ({FRESH_COVERAGE_CASES}; 0 skips them)",
+    )
     args = ap.parse_args(list(argv) if argv is not None else None)
     if args.family is not None:
         known = {s.name for s in FAMILIES}
@@ -491,6 +550,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             families=args.family,
             cache_dir=None if args.no_cache else out / _CACHE_DIR,
             progress=_stderr_line,
+            coverage_cases=args.coverage_cases,
         )
     except KeyError as exc:
         sys.stderr.write(f"{exc.args[0]}\n")

@@ -203,6 +203,8 @@ def test_validate_surrogates_receives_its_own_options(
             "12",
             "--out",
             str(tmp_path),
+            "--coverage-cases",
+            "0",
         ]
     )
     assert rc in (0, 1)
