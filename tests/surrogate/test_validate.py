@@ -65,21 +65,16 @@ def test_validation_resumes_from_its_cache_and_gives_the_same_scores(
     shipped: SurrogateLibrary, tmp_path: Path
 ) -> None:
     lines: list[str] = []
-    first = validate_library(
-        shipped,
-        n=40,
-        families=[CHEAP],
-        cache_dir=tmp_path,
-        progress=lines.append,
-        coverage_cases=2,
-    )
-    second = validate_library(
-        shipped,
-        n=40,
-        families=[CHEAP],
-        cache_dir=tmp_path,
-        progress=lines.append,
-        coverage_cases=2,
+    first, second = (
+        validate_library(
+            shipped,
+            n=40,
+            families=[CHEAP],
+            cache_dir=tmp_path,
+            progress=lines.append,
+            coverage_cases=2,
+        )
+        for _ in range(2)
     )
     assert "(cached)" not in lines[0]
     assert "(cached)" in lines[3]  # each run: its family line, then two interval lines
