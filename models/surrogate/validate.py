@@ -387,6 +387,23 @@ def _plot(result: Mapping[str, Any], path: Path) -> None:
     plt.close(fig)
 
 
+def _unmet(result: Mapping[str, Any]) -> str:
+    """The targets a validation result misses, as text."""
+    out = []
+    for nm, s in result["families"].items():
+        for o, v in s.items():
+            if isinstance(v, dict) and v.get("median_rel_error", 0.0) >= MEDIAN_ERROR_TARGET:
+                out.append(f"{nm} {o} {100 * v['median_rel_error']:.2f} %")
+        if s["decision_agreement_p"] <= AGREEMENT_TARGET:
+            out.append(f"{nm} ISS15+ agreement {100 * s['decision_agreement_p']:.1f} %")
+    if result["pooled"]["decision_agreement_p"] <= AGREEMENT_TARGET:
+        out.append("pooled ISS15+ agreement")
+    cov = result.get("coverage")
+    if cov is not None and cov["p_iss15_share"] < COVERAGE_TARGET:
+        out.append(f"P(ISS >= 15) interval coverage {cov['p_iss15_hits']}/{cov['cases']}")
+    return "; ".join(out)
+
+
 def write_validation(result: Mapping[str, Any], out_dir: Path) -> Path:
     """Write ``validation.json``, ``validation.png`` and ``VALIDATION.md`` into `out_dir`."""
     out_dir.mkdir(parents=True, exist_ok=True)
@@ -477,7 +494,7 @@ def write_validation(result: Mapping[str, Any], out_dir: Path) -> Path:
         f"{100 * MEDIAN_ERROR_TARGET:.0f} % per family, ISS15+ agreement over "
         f"{100 * AGREEMENT_TARGET:.0f} % per family and pooled, P(ISS >= 15) interval "
         f"coverage at least {100 * COVERAGE_TARGET:.0f} %): "
-        + ("**met**." if result["targets_met"] else "**not met**."),
+        + ("**met**." if result["targets_met"] else f"**not met** ({_unmet(result)})."),
         "",
     ]
     path = out_dir / "VALIDATION.md"
