@@ -919,9 +919,11 @@ def main(argv: Sequence[str] | None = None) -> int:
 
         t_rep = time.perf_counter()
         write_report(directory, directory.parent)
+        t_val = time.perf_counter()
         _validate_after_build(directory)
         if results:
-            timings["report_seconds"] = time.perf_counter() - t_rep
+            timings["report_seconds"] = t_val - t_rep
+            timings["validation_seconds"] = time.perf_counter() - t_val
             write_json(tpath, timings)
     sys.stderr.write(
         f"built {len(results)} families in {total:.1f} s; manifest {manifest['version']}\n"
@@ -939,7 +941,13 @@ def _validate_after_build(directory: Path) -> None:
     except ValueError as exc:
         sys.stderr.write(f"fresh validation skipped: {exc}\n")
         return
-    validate_main(["--artifacts", str(directory)])
+    rc = validate_main(["--artifacts", str(directory), "--out", str(directory.parent)])
+    if rc != 0:
+        sys.stderr.write(
+            "fresh validation: targets not met (VALIDATION.md names them)\n"
+            if rc == 1
+            else f"fresh validation failed (exit code {rc})\n"
+        )
 
 
 def _worker_init_env() -> None:

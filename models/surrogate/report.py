@@ -34,6 +34,7 @@ from models.surrogate.spec import (
     MEDIAN_ERROR_TARGET,
     P_RESOLUTION,
 )
+from models.surrogate.validate import FRESH_N
 
 __all__ = [
     "COVERAGE_SEED",
@@ -430,8 +431,8 @@ def write_report(artifact_dir: Path, out_dir: Path, coverage_cases: int = COVERA
         "Median relative error per measure; P(ISS>=15) and ISS as median absolute error; "
         "ISS15+ agreement: the decision P(ISS>=15) >= 0.5 (and ISS >= 15) of the surrogate "
         "vs the LPM. These held-out points were looked at while the designs were chosen; "
-        "VALIDATION.md (`aacn-triage validate-surrogates`) repeats the check on 600 fresh "
-        "points per family that no build decision has seen.",
+        "VALIDATION.md (`aacn-triage validate-surrogates`) repeats the check on "
+        f"{FRESH_N} fresh points per family that no build decision has seen.",
         "",
     ]
     measures = sorted({o for f in fams for o in f.outputs if o not in ("p_iss15", "iss")})

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from models.surrogate.evaluate import SurrogateLibrary, default_artifact_dir
-from models.surrogate.spec import FAMILIES
+from models.surrogate.spec import FAMILIES, FamilySpec
 from models.surrogate.validate import (
     AGREEMENT_TARGET,
     COVERAGE_TARGET,
@@ -32,7 +32,7 @@ def shipped() -> SurrogateLibrary:
     return SurrogateLibrary.load()
 
 
-def _spec(name: str):  # type: ignore[no-untyped-def]
+def _spec(name: str) -> FamilySpec:
     return next(s for s in FAMILIES if s.name == name)
 
 
@@ -81,7 +81,7 @@ def test_validation_resumes_from_its_cache_and_gives_the_same_scores(
     assert first == second
     assert first["coverage"]["cases"] == 2
     assert set(first["coverage"]["measure_mean_share"]) == {"hic15", "nij", "iss"}
-    # another seed or size is not taken from the cache
+    # another seed is not taken from the cache
     third = validate_library(
         shipped,
         n=40,
@@ -100,9 +100,43 @@ def test_validation_resumes_from_its_cache_and_gives_the_same_scores(
     assert 0.0 <= s["decision_agreement_p"] <= 1.0
 
 
-def test_unknown_family_is_a_usage_error(tmp_path: Path) -> None:
-    assert main(["--family", "frontal__nobody", "--n", "5", "--out", str(tmp_path)]) == 2
+def test_usage_errors_write_nothing(tmp_path: Path) -> None:
+    out = ["--out", str(tmp_path)]
+    assert main(["--family", "frontal__nobody", "--n", "5", *out]) == 2
+    assert main(["--family", CHEAP, "--n", "0", *out]) == 2
+    assert main(["--family", CHEAP, "--coverage-cases", "-1", *out]) == 2
     assert not (tmp_path / "VALIDATION.md").exists()
+
+
+@pytest.mark.parametrize(
+    "argv",
+    [["--family", CHEAP], ["--n", "50"], ["--seed", "7"], ["--coverage-cases", "0"]],
+)
+def test_a_non_default_run_does_not_overwrite_the_shipped_report(
+    argv: list[str], capsys: pytest.CaptureFixture[str]
+) -> None:
+    before = SHIPPED_JSON.read_bytes()
+    assert main(argv) == 2
+    assert "--out DIR (not the shipped report)" in capsys.readouterr().err
+    assert SHIPPED_JSON.read_bytes() == before
+
+
+def test_cached_runs_of_other_outputs_are_not_reused(tmp_path: Path) -> None:
+    """The cache key covers how the runs are made, not only the points: a family
+    whose output list changed, or an unreadable cache file, is rerun."""
+    from dataclasses import replace
+
+    from models.surrogate.validate import fresh_runs
+
+    spec = _spec(CHEAP)
+    fresh_runs(spec, 6, cache_dir=tmp_path)
+    fewer = replace(spec, outputs=spec.outputs[:-1])
+    runs, cached = fresh_runs(fewer, 6, cache_dir=tmp_path)
+    assert not cached
+    assert runs.y.shape == (6, len(fewer.outputs))
+    (tmp_path / f"{CHEAP}.npz").write_bytes(b"not a zip")
+    _, cached = fresh_runs(spec, 6, cache_dir=tmp_path)
+    assert not cached
 
 
 def test_command_writes_the_report_files(tmp_path: Path) -> None:
@@ -110,6 +144,23 @@ def test_command_writes_the_report_files(tmp_path: Path) -> None:
     result = json.loads((tmp_path / "validation.json").read_text())
     assert rc == (0 if result["targets_met"] else 1)
     assert list(result["families"]) == [CHEAP]
+    # a repeated family counts once
+    main(
+        [
+            "--family",
+            CHEAP,
+            "--family",
+            CHEAP,
+            "--n",
+            "30",
+            "--out",
+            str(tmp_path),
+            "--coverage-cases",
+            "1",
+        ]
+    )
+    again = json.loads((tmp_path / "validation.json").read_text())
+    assert again["families"] == result["families"]
     assert (tmp_path / "validation.png").stat().st_size > 1000
     text = (tmp_path / "VALIDATION.md").read_text()
     assert CHEAP in text
