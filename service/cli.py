@@ -277,16 +277,26 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     return 0
 
 
-def _cmd_build_surrogates(args: argparse.Namespace) -> int:
-    from models.surrogate.build import main as build_main
+#: Commands handed over whole to an engine module's ``main(argv)``: argparse's
+#: REMAINDER does not pass on arguments that start with "--" (``--family NAME``,
+#: ``--help``), so ``main`` below hands them their arguments itself.
+_HANDED_OVER: dict[str, tuple[str, str]] = {
+    "build-surrogates": (
+        "models.surrogate.build",
+        "build the PCE surrogate artifacts (offline; needs the `build` extra)",
+    ),
+    "validate-surrogates": (
+        "models.surrogate.validate",
+        "score the surrogates on fresh direct LPM runs (resumable)",
+    ),
+}
 
-    return int(build_main(args.build_args) or 0)
 
+def _cmd_handed_over(command: str, argv: list[str]) -> int:
+    import importlib
 
-def _cmd_validate_surrogates(args: argparse.Namespace) -> int:
-    from models.surrogate.validate import main as validate_main
-
-    return int(validate_main(args.validate_args) or 0)
+    module = importlib.import_module(_HANDED_OVER[command][0])
+    return int(module.main(argv) or 0)
 
 
 def _cmd_baseline(args: argparse.Namespace) -> int:
@@ -345,21 +355,9 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("--plot", help="draw pulse, motion and measures to this image (PNG)")
     sim.set_defaults(func=_cmd_simulate)
 
-    build = sub.add_parser(
-        "build-surrogates",
-        help="build the PCE surrogate artifacts (offline; needs the `build` extra)",
-        add_help=False,
-    )
-    build.add_argument("build_args", nargs=argparse.REMAINDER, help="see --help")
-    build.set_defaults(func=_cmd_build_surrogates)
-
-    val = sub.add_parser(
-        "validate-surrogates",
-        help="score the surrogates on fresh direct LPM runs (resumable)",
-        add_help=False,
-    )
-    val.add_argument("validate_args", nargs=argparse.REMAINDER, help="see --help")
-    val.set_defaults(func=_cmd_validate_surrogates)
+    for command, (_, text) in _HANDED_OVER.items():
+        handed = sub.add_parser(command, help=text, add_help=False)
+        handed.add_argument("args", nargs=argparse.REMAINDER, help="see --help")
 
     base = sub.add_parser("baseline", help="statistical baseline")
     base_sub = base.add_subparsers(dest="baseline_command", required=True)
@@ -376,12 +374,8 @@ def build_parser() -> argparse.ArgumentParser:
 
 def main(argv: Sequence[str] | None = None) -> int:
     raw = list(sys.argv[1:] if argv is None else argv)
-    if raw[:1] == ["build-surrogates"]:
-        # handed over whole: argparse's REMAINDER does not pass on arguments
-        # that start with "--" (``--family NAME``, ``--help``)
-        return _cmd_build_surrogates(argparse.Namespace(build_args=raw[1:]))
-    if raw[:1] == ["validate-surrogates"]:
-        return _cmd_validate_surrogates(argparse.Namespace(validate_args=raw[1:]))
+    if raw[:1] and raw[0] in _HANDED_OVER:
+        return _cmd_handed_over(raw[0], raw[1:])
     args = build_parser().parse_args(raw)
     return int(args.func(args))
 

@@ -570,6 +570,13 @@ def _checks() -> dict[str, str]:
     }
 
 
+def relative_error(y_pred: npt.ArrayLike, y_true: npt.ArrayLike) -> FloatArray:
+    """|y_pred - y_true| / |y_true| elementwise (a zero true value divides by 1e-12)."""
+    a = np.asarray(y_true, dtype=np.float64)
+    b = np.asarray(y_pred, dtype=np.float64)
+    return np.asarray(np.abs(b - a) / np.maximum(np.abs(a), 1e-12), dtype=np.float64)
+
+
 def heldout_scores(spec: FamilySpec, y_true: FloatArray, y_pred: FloatArray) -> dict[str, Any]:
     """Surrogate against direct LPM values on held-out points (REPORT.md Table B).
 
@@ -597,7 +604,7 @@ def heldout_scores(spec: FamilySpec, y_true: FloatArray, y_pred: FloatArray) -> 
             err = np.abs(b - a)
             out[name] = {"median_abs_error": float(np.median(err))}
         else:
-            rel = np.abs(b - a) / np.maximum(np.abs(a), 1e-12)
+            rel = relative_error(b, a)
             out[name] = {
                 "median_rel_error": float(np.median(rel)),
                 "p90_rel_error": float(np.quantile(rel, 0.9)),
@@ -934,20 +941,15 @@ def main(argv: Sequence[str] | None = None) -> int:
 def _validate_after_build(directory: Path) -> None:
     """Rerun the fresh validation (VALIDATION.md) when the library is complete."""
     from models.surrogate.evaluate import SurrogateLibrary
-    from models.surrogate.validate import main as validate_main
+    from models.surrogate.validate import validate_and_write
 
     try:
-        SurrogateLibrary.load(directory)
+        lib = SurrogateLibrary.load(directory)
     except ValueError as exc:
         sys.stderr.write(f"fresh validation skipped: {exc}\n")
         return
-    rc = validate_main(["--artifacts", str(directory), "--out", str(directory.parent)])
-    if rc != 0:
-        sys.stderr.write(
-            "fresh validation: targets not met (VALIDATION.md names them)\n"
-            if rc == 1
-            else f"fresh validation failed (exit code {rc})\n"
-        )
+    if not validate_and_write(lib, directory.parent)["targets_met"]:
+        sys.stderr.write("fresh validation: targets not met (VALIDATION.md names them)\n")
 
 
 def _worker_init_env() -> None:

@@ -784,6 +784,8 @@ def service_raw_threshold(family_name: str, outputs: Sequence[str]) -> float:
 
 
 def _pooled(artifact_dir: Path, fams: list[SurrogateFamily]) -> dict[str, str]:
+    from models.surrogate.build import relative_error
+
     rel: dict[str, list[float]] = {}
     agree: list[bool] = []
     agree_iss: list[bool] = []
@@ -801,7 +803,7 @@ def _pooled(artifact_dir: Path, fams: list[SurrogateFamily]) -> dict[str, str]:
             elif o == "iss":
                 agree_iss += list((yh[:, k] >= 15) == (yp[:, k] >= 15))
             else:
-                r = np.abs(yp[:, k] - yh[:, k]) / np.maximum(np.abs(yh[:, k]), 1e-12)
+                r = relative_error(yp[:, k], yh[:, k])
                 rel.setdefault(o, []).extend(r.tolist())
     out = {
         f"{o} median relative error": f"{100 * float(np.median(v)):.1f}%" for o, v in rel.items()

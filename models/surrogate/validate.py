@@ -65,6 +65,7 @@ __all__ = [
     "fresh_runs",
     "main",
     "score_family",
+    "validate_and_write",
     "validate_library",
     "write_validation",
 ]
@@ -211,8 +212,12 @@ def fresh_runs(
     return FreshRuns(spec.name, x, y, seed, code_sha, params_sha), False
 
 
-def score_family(spec: FamilySpec, fam: SurrogateFamily, runs: FreshRuns) -> dict[str, Any]:
+def score_family(
+    spec: FamilySpec, fam: SurrogateFamily, runs: FreshRuns, pred: FloatArray | None = None
+) -> dict[str, Any]:
     """The build's held-out scores on the fresh runs, plus the service-threshold agreement.
+
+    `pred` is the surrogate at ``runs.x`` (``fam.predict(runs.x)``, computed when None).
 
     Returns
     -------
@@ -229,10 +234,11 @@ def score_family(spec: FamilySpec, fam: SurrogateFamily, runs: FreshRuns) -> dic
         values, each bin including its lower bound; None for an empty bin,
         which ties can make).
     """
-    from models.surrogate.build import heldout_scores
+    from models.surrogate.build import heldout_scores, relative_error
     from models.surrogate.report import service_raw_threshold
 
-    pred = fam.predict(runs.x)
+    if pred is None:
+        pred = fam.predict(runs.x)
     scores = heldout_scores(spec, runs.y, pred)
     ok = np.all(np.isfinite(runs.y), axis=1)
     k = spec.outputs.index("p_iss15")
@@ -245,7 +251,7 @@ def score_family(spec: FamilySpec, fam: SurrogateFamily, runs: FreshRuns) -> dic
         if "median_rel_error" not in scores.get(o, {}):
             continue
         # where the error sits: by quartile of the LPM value
-        rel = np.abs(pv[:, j] - yv[:, j]) / np.maximum(np.abs(yv[:, j]), 1e-12)
+        rel = relative_error(pv[:, j], yv[:, j])
         bounds = np.quantile(yv[:, j], [0.25, 0.5, 0.75])
         bins = np.searchsorted(bounds, yv[:, j], side="right")
         # values below the fit floor are zero to the fitted scale (spec.MEASURE_FLOORS)
@@ -270,9 +276,12 @@ def score_family(spec: FamilySpec, fam: SurrogateFamily, runs: FreshRuns) -> dic
 
 
 def _pooled(
-    specs: Sequence[FamilySpec], lib: SurrogateLibrary, runs: Mapping[str, FreshRuns]
+    specs: Sequence[FamilySpec],
+    runs: Mapping[str, FreshRuns],
+    preds: Mapping[str, FloatArray],
 ) -> dict[str, float]:
     from models.surrogate.build import ISS15_DECISION_PROBABILITY as thr
+    from models.surrogate.build import relative_error
 
     rel: dict[str, list[float]] = {}
     agree: list[bool] = []
@@ -280,13 +289,12 @@ def _pooled(
         r = runs[spec.name]
         ok = np.all(np.isfinite(r.y), axis=1)
         y = r.y[ok]
-        pred = lib.families()[spec.name].predict(r.x[ok])
+        pred = preds[spec.name][ok]
         for j, o in enumerate(spec.outputs):
             if o == "p_iss15":
                 agree.extend(((y[:, j] >= thr) == (pred[:, j] >= thr)).tolist())
             elif o != "iss":
-                e = np.abs(pred[:, j] - y[:, j]) / np.maximum(np.abs(y[:, j]), 1e-12)
-                rel.setdefault(o, []).extend(e.tolist())
+                rel.setdefault(o, []).extend(relative_error(pred[:, j], y[:, j]).tolist())
     out = {f"{o}_median_rel_error": float(np.median(v)) for o, v in sorted(rel.items())}
     out["decision_agreement_p"] = float(np.mean(agree))
     return out
@@ -351,11 +359,13 @@ def validate_library(
         if spec.name not in lib.families():
             raise KeyError(f"family {spec.name!r} is not in the surrogate library")
     runs: dict[str, FreshRuns] = {}
+    preds: dict[str, FloatArray] = {}
     per: dict[str, Any] = {}
     for i, spec in enumerate(specs, 1):
         r, cached = fresh_runs(spec, n, seed, cache_dir)
         runs[spec.name] = r
-        scores = score_family(spec, lib.families()[spec.name], r)
+        preds[spec.name] = lib.families()[spec.name].predict(r.x)
+        scores = score_family(spec, lib.families()[spec.name], r, preds[spec.name])
         per[spec.name] = scores
         if progress is not None:
             progress(
@@ -364,7 +374,7 @@ def validate_library(
                 f"{100 * scores['worst_median_rel_error']:.2f} %, ISS15+ agreement "
                 f"{100 * scores['decision_agreement_p']:.1f} %"
             )
-    pooled = _pooled(specs, lib, runs)
+    pooled = _pooled(specs, runs, preds)
     coverage: dict[str, Any] | None = None
     if coverage_cases > 0:
         from models.surrogate.report import coverage_check, measure_coverage_check
@@ -578,6 +588,22 @@ def write_validation(result: Mapping[str, Any], out_dir: Path) -> Path:
     return path
 
 
+def validate_and_write(
+    lib: SurrogateLibrary, out_dir: Path, *, use_cache: bool = True, **kwargs: Any
+) -> dict[str, Any]:
+    """:func:`validate_library` with progress on stderr and the run cache under
+    `out_dir`, then :func:`write_validation` into `out_dir`; the result."""
+    result = validate_library(
+        lib,
+        cache_dir=out_dir / _CACHE_DIR if use_cache else None,
+        progress=_stderr_line,
+        **kwargs,
+    )
+    path = write_validation(result, out_dir)
+    sys.stderr.write(f"wrote {path}; targets {'met' if result['targets_met'] else 'NOT met'}\n")
+    return result
+
+
 def _stderr_line(line: str) -> None:
     sys.stderr.write(line + "\n")
     sys.stderr.flush()
@@ -651,18 +677,16 @@ def main(argv: Sequence[str] | None = None) -> int:
     if stale is not None:
         sys.stderr.write(f"warning: {stale}\n")
     try:
-        result = validate_library(
+        result = validate_and_write(
             lib,
+            out,
+            use_cache=not args.no_cache,
             n=args.n,
             seed=args.seed,
             families=args.family,
-            cache_dir=None if args.no_cache else out / _CACHE_DIR,
-            progress=_stderr_line,
             coverage_cases=args.coverage_cases,
         )
     except KeyError as exc:
         sys.stderr.write(f"{exc.args[0]}\n")
         return 2
-    path = write_validation(result, out)
-    sys.stderr.write(f"wrote {path}; targets {'met' if result['targets_met'] else 'NOT met'}\n")
     return 0 if result["targets_met"] else 1
