@@ -24,6 +24,20 @@ broader (weighted prevalence about 11 %), so the LPM's probabilities are not
 expected to match its rates; the ranking (AUC) and the share of serious cases
 the LPM's decision flags (sensitivity) are what the check is about.
 
+Restraint effects (:func:`restraint_effects`): the difference the belt, and
+the frontal airbag with and without the belt, make to the outcome rate in the
+field and to the occupant models' P, each standardised over the delta-V
+bands (a weighted mean of the within-band differences, with the band's
+weight in the compared rows), per sex and pooled. The field differences carry
+95 % intervals from a bootstrap over the 24 primary sampling units (PSUs, the
+first field of ``caseid``: NASS-CDS is a cluster sample, so resampling rows
+would understate the spread). The data are observational: airbag-equipped
+vehicles are newer (model years 1992-2000 against 1979-1994, 5th-95th
+percentiles), so each field difference is also given over the vehicles of
+model year :data:`COMMON_MODEL_YEAR` and later, where both kinds are common.
+Sizes do not compare (a police outcome broader than ISS >= 15), signs and
+whether an effect is distinguishable from zero do.
+
 Run::
 
     python -m models.field_check [--out DIR]
@@ -64,15 +78,45 @@ from models.notification import (
 from models.risk_calibration import corrected_probability, zero_load_probability
 from models.triage import LPM_THRESHOLDS, EngineModels, load_engine_models, simulate_notification
 
-__all__ = ["FieldCase", "FieldCheck", "field_cases", "lpm_probabilities", "run_field_check"]
+__all__ = [
+    "FieldCase",
+    "FieldCheck",
+    "RestraintEffect",
+    "field_cases",
+    "lpm_probabilities",
+    "restraint_effects",
+    "run_field_check",
+]
 
 FloatArray = npt.NDArray[np.float64]
+BoolArray = npt.NDArray[np.bool_]
+IntArray = npt.NDArray[np.int64]
 
 #: NASS ``dvcat`` bands in order (labels as in the data).
 BANDS: tuple[str, ...] = tuple(DELTA_V_BAND_MIDPOINTS_KMH)
 #: Frontal thresholds tabulated (the service's 0.10 among them; 0.02 Lubbe & Kiuchi,
 #: 0.20 CDC 2008: crash-data-and-triage.md section 1).
 THRESHOLDS: tuple[float, ...] = (0.02, 0.03, 0.05, 0.075, 0.10, 0.15, 0.20)
+#: Seed of the PSU bootstrap of the restraint effects. [R] Fixed so that the
+#: shipped field_check.md is reproduced bit for bit.
+BOOTSTRAP_SEED = 20261203
+#: PSU resamples of the bootstrap. [R] The 2.5 and 97.5 percentiles of 2000
+#: replicates move by a few tenths of a percentage point between seeds.
+BOOTSTRAP_REPLICATES = 2000
+#: First vehicle model year of the restricted comparison. [R] In the frontal
+#: rows the airbag-equipped vehicles span model years 1992-2000 and the others
+#: 1979-1994 (5th-95th weighted-count percentiles); from 1994 on, both kinds
+#: are common (the US rule made frontal airbags universal from MY 1998).
+COMMON_MODEL_YEAR = 1994
+#: The compared restraint contrasts, name -> description (the rows each compares
+#: and which of them are "with" the restraint: :func:`_contrast`).
+CONTRASTS: dict[str, str] = {
+    "belt": "belted vs unbelted",
+    "airbag_belted": "frontal airbag vs none, belted",
+    "airbag_unbelted": "frontal airbag vs none, unbelted",
+}
+#: Populations of the restraint effects.
+POPULATIONS: tuple[str, ...] = ("male", "female", "all")
 
 
 @dataclass(frozen=True)
@@ -88,6 +132,10 @@ class FieldCase:
     age_years: float
     serious: bool
     weight: float
+    #: primary sampling unit (first field of ``caseid``)
+    psu: int = 0
+    #: vehicle model year (None when not recorded)
+    vehicle_year: int | None = None
 
 
 def field_cases(csv_path: Path | None = None) -> list[FieldCase]:
@@ -122,9 +170,16 @@ def field_cases(csv_path: Path | None = None) -> list[FieldCase]:
                     age_years=float(rec["ageOFocc"]),
                     serious=sev in SERIOUS_SEVERITIES,
                     weight=weight,
+                    psu=int(rec["caseid"].split(":")[0]),
+                    vehicle_year=_year(rec["yearVeh"]),
                 )
             )
     return out
+
+
+def _year(text: str) -> int | None:
+    t = text.strip()
+    return None if t in ("", "NA") else int(float(t))
 
 
 def _body(case: FieldCase) -> Body:
@@ -169,6 +224,179 @@ def lpm_probabilities(cases: Sequence[FieldCase], models: EngineModels) -> Float
 
 
 @dataclass(frozen=True)
+class RestraintEffect:
+    """A restraint's effect on the outcome in the field and on the models' P.
+
+    Differences are "with" minus "without" (negative: the restraint lowers
+    the risk), standardised over the delta-V bands.
+    """
+
+    population: str
+    contrast: str
+    n_with: int
+    n_without: int
+    field: float
+    field_ci95: tuple[float, float]
+    #: the same over the vehicles of model year COMMON_MODEL_YEAR and later
+    field_recent: float
+    field_recent_ci95: tuple[float, float]
+    model: float
+
+
+def _masks(cases: Sequence[FieldCase]) -> dict[str, BoolArray]:
+    return {
+        "male": np.array([c.male for c in cases]),
+        "belted": np.array([c.belted for c in cases]),
+        "airbag": np.array([c.frontal_airbag is not AirbagState.ABSENT for c in cases]),
+        "recent": np.array(
+            [c.vehicle_year is not None and c.vehicle_year >= COMMON_MODEL_YEAR for c in cases]
+        ),
+    }
+
+
+def _contrast(name: str, m: dict[str, BoolArray]) -> tuple[BoolArray, BoolArray]:
+    """Rows compared and rows "with" of a contrast (boolean masks)."""
+    every = np.ones(m["belted"].shape, dtype=bool)
+    if name == "belt":
+        return every, m["belted"]
+    if name == "airbag_belted":
+        return m["belted"], m["airbag"]
+    if name == "airbag_unbelted":
+        return ~m["belted"], m["airbag"]
+    raise ValueError(f"unknown contrast {name!r}")
+
+
+def _standardised(swy: FloatArray, sw: FloatArray) -> FloatArray:
+    """Band-standardised difference from sums by (..., band, without/with).
+
+    ``swy`` and ``sw`` hold the weighted outcome sums and weight sums, shape
+    (..., n_bands, 2). Bands where either group is empty are left out.
+    """
+    both = (sw[..., 0] > 0.0) & (sw[..., 1] > 0.0)
+    rate = np.divide(swy, sw, out=np.zeros_like(swy), where=sw > 0.0)
+    band_w = np.where(both, sw.sum(axis=-1), 0.0)
+    diff = rate[..., 1] - rate[..., 0]
+    num = np.asarray((band_w * diff).sum(axis=-1), dtype=np.float64)
+    den = np.asarray(band_w.sum(axis=-1), dtype=np.float64)
+    # NaN where no band holds both groups (nothing to compare)
+    return np.divide(num, den, out=np.full_like(num, np.nan), where=den > 0.0)
+
+
+def _psu_sums(
+    value: FloatArray, weight: FloatArray, band: IntArray, group: IntArray, psu: IntArray
+) -> tuple[IntArray, FloatArray, FloatArray]:
+    """Weighted sums by (PSU, band, group): outcome and weight, shape (n_psu, n_bands, 2)."""
+    psus, pidx = np.unique(psu, return_inverse=True)
+    cell = (pidx * len(BANDS) + band) * 2 + group
+    size = len(psus) * len(BANDS) * 2
+    shape = (len(psus), len(BANDS), 2)
+    # (float even for an empty selection, where bincount returns integers)
+    swy = np.bincount(cell, weights=weight * value, minlength=size).astype(np.float64)
+    sw = np.bincount(cell, weights=weight, minlength=size).astype(np.float64)
+    swy, sw = swy.reshape(shape), sw.reshape(shape)
+    return psus, swy, sw
+
+
+def _field_difference(
+    y: FloatArray,
+    w: FloatArray,
+    band: IntArray,
+    group: IntArray,
+    psu: IntArray,
+    draws: FloatArray,
+    all_psus: IntArray,
+) -> tuple[float, tuple[float, float]]:
+    """Point difference and its PSU-bootstrap 95 % interval.
+
+    A cluster bootstrap written here rather than ``scipy.stats.bootstrap``,
+    which resamples observations, not clusters: each replicate draws the
+    survey's PSUs with replacement (``draws``, their multiplicities) and
+    recomputes the difference from per-PSU sums, so 2000 replicates cost one
+    matrix product.
+    """
+    psus, swy, sw = _psu_sums(y, w, band, group, psu)
+    point = float(_standardised(swy.sum(axis=0), sw.sum(axis=0)))
+    if not np.isfinite(point):
+        return point, (point, point)
+    # draws: (replicates, len(all_psus)) multiplicities of every PSU of the data
+    mult = draws[:, np.searchsorted(all_psus, psus)]
+    reps = _standardised(np.einsum("bp,pkg->bkg", mult, swy), np.einsum("bp,pkg->bkg", mult, sw))
+    lo, hi = np.nanpercentile(reps, [2.5, 97.5])
+    return point, (float(lo), float(hi))
+
+
+def restraint_effects(
+    cases: Sequence[FieldCase],
+    p_lpm: FloatArray,
+    *,
+    replicates: int = BOOTSTRAP_REPLICATES,
+    seed: int = BOOTSTRAP_SEED,
+) -> tuple[RestraintEffect, ...]:
+    """Belt and airbag effects in the field and in the occupant models.
+
+    Parameters
+    ----------
+    cases : sequence of FieldCase
+    p_lpm : ndarray, shape (n,)
+        The occupant models' P(ISS >= 15) of each case (:func:`lpm_probabilities`).
+    replicates : int, optional
+        PSU bootstrap replicates.
+    seed : int, optional
+
+    Returns
+    -------
+    tuple of RestraintEffect
+        One per population (:data:`POPULATIONS`) and contrast (:data:`CONTRASTS`).
+    """
+    y = np.array([1.0 if c.serious else 0.0 for c in cases])
+    w = np.array([c.weight for c in cases])
+    band = np.array([BANDS.index(c.band) for c in cases], dtype=np.int64)
+    psu = np.array([c.psu for c in cases], dtype=np.int64)
+    all_psus = np.unique(psu)
+    rng = np.random.default_rng(seed)
+    # the same PSU resamples for every contrast (paired intervals)
+    draws = rng.multinomial(
+        len(all_psus), np.full(len(all_psus), 1.0 / len(all_psus)), size=replicates
+    ).astype(np.float64)
+    m = _masks(cases)
+    pop_mask = {"male": m["male"], "female": ~m["male"], "all": np.ones(len(cases), dtype=bool)}
+    out = []
+    for pop in POPULATIONS:
+        for name in CONTRASTS:
+            rows, with_ = _contrast(name, m)
+            sel = rows & pop_mask[pop]
+            group = with_.astype(np.int64)
+            fields = []
+            for subset in (sel, sel & m["recent"]):
+                fields.append(
+                    _field_difference(
+                        y[subset],
+                        w[subset],
+                        band[subset],
+                        group[subset],
+                        psu[subset],
+                        draws,
+                        all_psus,
+                    )
+                )
+            _, swy, sw = _psu_sums(p_lpm[sel], w[sel], band[sel], group[sel], psu[sel])
+            out.append(
+                RestraintEffect(
+                    population=pop,
+                    contrast=name,
+                    n_with=int((sel & with_).sum()),
+                    n_without=int((sel & ~with_).sum()),
+                    field=fields[0][0],
+                    field_ci95=fields[0][1],
+                    field_recent=fields[1][0],
+                    field_recent_ci95=fields[1][1],
+                    model=float(_standardised(swy.sum(axis=0), sw.sum(axis=0))),
+                )
+            )
+    return tuple(out)
+
+
+@dataclass(frozen=True)
 class FieldCheck:
     """Weighted figures of the occupant models against the NASS frontal outcomes."""
 
@@ -186,6 +414,8 @@ class FieldCheck:
     #: per frontal threshold on the LPM's corrected P: (flagged share, sensitivity,
     #: over-triage), weighted
     by_threshold: dict[float, tuple[float, float, float]]
+    #: belt and airbag effects, field against models (:func:`restraint_effects`)
+    restraints: tuple[RestraintEffect, ...]
     y: FloatArray
     weight: FloatArray
     p_lpm: FloatArray
@@ -242,6 +472,7 @@ def run_field_check(models: EngineModels, csv_path: Path | None = None) -> Field
         over_triage=ot,
         by_band=by_band,
         by_threshold=by_threshold,
+        restraints=restraint_effects(cases, p_lpm),
         y=y,
         weight=w,
         p_lpm=p_lpm,
@@ -287,15 +518,80 @@ def _markdown(fc: FieldCheck) -> str:
         lines.append(
             f"| {t:.3f}{mark} | {100 * flagged:.1f} % | {100 * se:.1f} % | {100 * ot:.1f} % |"
         )
+    lines += _restraint_markdown(fc.restraints)
     lines += [
         "",
         "Reading: the LPM probability is of ISS >= 15 for a dummy in a 2010 compact sedan,",
-        "the outcome is a police rating in 1997-2000 vehicles; only the ranking and the",
-        "share flagged are comparable. The gap between the ranking by the LPM and by delta-V",
+        "the outcome is a police rating in 1997-2000 vehicles; only the ranking, the share",
+        "flagged and the direction of the restraint effects are comparable, not the sizes.",
+        "The gap between the ranking by the LPM and by delta-V",
         "alone is what the occupant physics adds (belt, airbag, body, age) for these crashes.",
         "",
     ]
     return "\n".join(lines)
+
+
+def _pp(x: float) -> str:
+    """A difference of rates in percentage points, signed."""
+    return f"{100 * x:+.1f}"
+
+
+def _ci(ci: tuple[float, float]) -> str:
+    return f"[{_pp(ci[0])}, {_pp(ci[1])}]"
+
+
+def _excludes_zero(ci: tuple[float, float]) -> bool:
+    return ci[0] > 0.0 or ci[1] < 0.0
+
+
+def _restraint_markdown(effects: Sequence[RestraintEffect]) -> list[str]:
+    lines = [
+        "",
+        "## Restraint effects: the field against the occupant models",
+        "",
+        "Difference in percentage points, with the restraint minus without (negative: the",
+        "restraint lowers the risk), standardised over the delta-V bands; the field's 95 %",
+        f"intervals from {BOOTSTRAP_REPLICATES} bootstrap resamples of the 24 primary sampling",
+        f"units (seed {BOOTSTRAP_SEED}). Observational data: the airbag-equipped vehicles are",
+        "newer, so the field difference is also given over vehicles of model year "
+        f"{COMMON_MODEL_YEAR} and later.",
+        "",
+        "| population | contrast | occupants with / without | field | field, MY >= "
+        f"{COMMON_MODEL_YEAR} | occupant models |",
+        "|---|---|---:|---:|---:|---:|",
+    ]
+    for e in effects:
+        lines.append(
+            f"| {e.population} | {CONTRASTS[e.contrast]} | {e.n_with:,} / {e.n_without:,} | "
+            f"{_pp(e.field)} {_ci(e.field_ci95)} | {_pp(e.field_recent)} "
+            f"{_ci(e.field_recent_ci95)} | {_pp(e.model)} |"
+        )
+    pooled = {e.contrast: e for e in effects if e.population == "all"}
+    lines.append("")
+    for name, e in pooled.items():
+        verdict = (
+            "distinguishable from zero"
+            if _excludes_zero(e.field_ci95)
+            else "not distinguishable from zero"
+        )
+        lines.append(
+            f"- {CONTRASTS[name].capitalize()}, all occupants: field {_pp(e.field)} points "
+            f"({verdict}), occupant models {_pp(e.model)} points."
+        )
+    belted = pooled["airbag_belted"]
+    finding = (
+        "shows no benefit of the bag to belted occupants distinguishable from zero"
+        if belted.field_ci95[1] >= 0.0
+        else f"shows a benefit of the bag to belted occupants ({_pp(belted.field)} points)"
+    )
+    lines += [
+        "",
+        "The occupant models' airbag effect for belted occupants bears on an open item of",
+        "the occupant models (models/lpm/README.md: the bag adds head and chest load to a",
+        "belted small driver whose head does not reach the wheel without it); the field",
+        f"{finding} in these crashes.",
+    ]
+    return lines
 
 
 def _plot(fc: FieldCheck, path: Path) -> None:
@@ -304,7 +600,11 @@ def _plot(fc: FieldCheck, path: Path) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    fig, (ax1, ax2) = plt.subplots(1, 2, figsize=(10, 4))
+    fig = plt.figure(figsize=(11, 8.5))
+    grid = fig.add_gridspec(2, 2, height_ratios=(1.0, 1.1))
+    ax1 = fig.add_subplot(grid[0, 0])
+    ax2 = fig.add_subplot(grid[0, 1])
+    ax3 = fig.add_subplot(grid[1, :])
     for label, score, auc in (
         ("occupant models", fc.p_lpm, fc.auc_lpm),
         ("baseline (in-sample)", fc.p_baseline, fc.auc_baseline),
@@ -327,6 +627,22 @@ def _plot(fc: FieldCheck, path: Path) -> None:
     ax2.set_xlabel("delta-V band (km/h)")
     ax2.set_ylabel("probability / rate")
     ax2.legend(fontsize=8)
+    effects = fc.restraints
+    ys = np.arange(len(effects))[::-1]
+    field = np.array([100 * e.field for e in effects])
+    err = np.array(
+        [
+            [100 * (e.field - e.field_ci95[0]) for e in effects],
+            [100 * (e.field_ci95[1] - e.field) for e in effects],
+        ]
+    )
+    ax3.errorbar(field, ys, xerr=err, fmt="o", capsize=3, label="field (95 % PSU bootstrap)")
+    ax3.plot([100 * e.model for e in effects], ys, "s", label="occupant models")
+    ax3.axvline(0.0, color="k", lw=0.8)
+    ax3.set_yticks(ys, [f"{e.population}: {CONTRASTS[e.contrast]}" for e in effects], fontsize=8)
+    ax3.set_xlabel("with - without, percentage points (band-standardised)")
+    ax3.set_title("restraint effects: the field against the occupant models")
+    ax3.legend(fontsize=8, loc="upper right")
     fig.tight_layout()
     fig.savefig(path, dpi=110)
     plt.close(fig)
