@@ -28,15 +28,21 @@ Restraint effects (:func:`restraint_effects`): the difference the belt, and
 the frontal airbag with and without the belt, make to the outcome rate in the
 field and to the occupant models' P, each standardised over the delta-V
 bands (a weighted mean of the within-band differences, with the band's
-weight in the compared rows), per sex and pooled. The field differences carry
-95 % intervals from a bootstrap over the 24 primary sampling units (PSUs, the
-first field of ``caseid``: NASS-CDS is a cluster sample, so resampling rows
-would understate the spread). The data are observational: airbag-equipped
-vehicles are newer (model years 1992-2000 against 1979-1994, 5th-95th
-percentiles of the rows), so each field difference is also given over the vehicles of
-model year :data:`COMMON_MODEL_YEAR` and later, where both kinds are common.
-Sizes do not compare (a police outcome broader than ISS >= 15), signs and
-whether an effect is distinguishable from zero do.
+weight in the compared rows), per sex and pooled (the pooled rows are not
+standardised over sex). The field differences carry 95 % intervals from a
+bootstrap over the survey's primary sampling units (PSUs, the first field of
+``caseid``, 24 in the extract: NASS-CDS is a cluster sample, so resampling
+rows would understate the spread). The bootstrap is a simple one: it ignores
+the survey's strata and draws n of the n PSUs (the Rao-Wu form draws n - 1,
+which widens the intervals by about 2 %), and a replicate that lacks one of
+the groups in a band the point estimate uses is dropped (the share dropped is
+reported). The data are observational: airbag-equipped vehicles are newer
+(model years 1992-2000 against 1979-1994, 5th-95th percentiles of the rows),
+so each field difference is also given over the vehicles of model year
+:data:`COMMON_MODEL_YEAR` and later. The outcome is broader than
+ISS >= 15, so signs and whether an effect is distinguishable from zero
+compare, and sizes only one way (a model P above the field rate is too
+harsh).
 
 Run::
 
@@ -50,6 +56,7 @@ from __future__ import annotations
 
 import argparse
 import csv
+import math
 import sys
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -102,16 +109,21 @@ THRESHOLDS: tuple[float, ...] = (0.02, 0.03, 0.05, 0.075, 0.10, 0.15, 0.20)
 #: Seed of the PSU bootstrap of the restraint effects. [R] Fixed so that the
 #: shipped field_check.md is reproduced bit for bit.
 BOOTSTRAP_SEED = 20261203
-#: PSU resamples of the bootstrap. [R] Measured 2026-12-03 over three other
-#: seeds: the interval bounds moved by up to 2.4 percentage points with 2000
-#: replicates (the tails of the small subsets) and by up to 0.8 with 10,000,
-#: which take 0.15 s.
+#: PSU resamples of the bootstrap. [R] Measured 2026-12-03 against seeds 1, 2,
+#: 3 and 777: the interval bounds moved by up to 2.4 percentage points with
+#: 2000 replicates (the tails of the small subsets) and by about 1 point with
+#: 10,000, which take 0.15 s.
 BOOTSTRAP_REPLICATES = 10_000
 #: First vehicle model year of the restricted comparison. [R] In the frontal
 #: rows the airbag-equipped vehicles span model years 1992-2000 and the others
-#: 1979-1994 (5th-95th percentiles of the rows); from 1994 on, both kinds are
-#: common (the US rule made frontal airbags universal from MY 1998).
+#: 1979-1994 (5th-95th percentiles of the rows); from 1994 on both kinds occur
+#: in every delta-V band, belted and unbelted, though only about 10 % of those
+#: rows are without an airbag (2-128 per band), hence the wide intervals.
 COMMON_MODEL_YEAR = 1994
+#: Distance of an interval bound from zero (percentage points) under which the
+#: report calls the verdict "distinguishable from zero" or not borderline. [R]
+#: About the seed-to-seed movement of a bound (BOOTSTRAP_REPLICATES, above).
+BORDERLINE_POINTS = 1.0
 #: The compared restraint contrasts, name -> description (the rows each compares
 #: and which of them are "with" the restraint: :func:`_contrast`).
 CONTRASTS: dict[str, str] = {
@@ -144,9 +156,9 @@ class FieldCase:
     serious: bool
     weight: float
     #: primary sampling unit (first field of ``caseid``)
-    psu: int = 0
+    psu: int
     #: vehicle model year (None when not recorded)
-    vehicle_year: int | None = None
+    vehicle_year: int | None
 
 
 def field_cases(csv_path: Path | None = None) -> list[FieldCase]:
@@ -252,6 +264,9 @@ class RestraintEffect:
     field_recent: float
     field_recent_ci95: tuple[float, float]
     model: float
+    #: shares of the bootstrap replicates dropped (a group missing from a band)
+    dropped: float = 0.0
+    dropped_recent: float = 0.0
 
 
 def _columns(cases: Sequence[FieldCase]) -> tuple[FloatArray, FloatArray, IntArray, IntArray]:
@@ -273,6 +288,8 @@ def _psu_draws(psu: IntArray, replicates: int, seed: int) -> tuple[IntArray, Flo
         Multiplicities (each row sums to n_psu): PSUs drawn with replacement.
     """
     all_psus = np.unique(psu)
+    if len(all_psus) < 2:
+        raise ValueError("a cluster bootstrap needs at least two PSUs")
     rng = np.random.default_rng(seed)
     draws = rng.multinomial(
         len(all_psus), np.full(len(all_psus), 1.0 / len(all_psus)), size=replicates
@@ -303,26 +320,50 @@ def _contrast(name: str, m: dict[str, BoolArray]) -> tuple[BoolArray, BoolArray]
     raise ValueError(f"unknown contrast {name!r}")
 
 
-def _standardised(swy: FloatArray, sw: FloatArray) -> FloatArray:
+def _standardised(swy: FloatArray, sw: FloatArray, bands: BoolArray | None = None) -> FloatArray:
     """Band-standardised difference from sums by (..., band, without/with).
 
-    ``swy`` and ``sw`` hold the weighted outcome sums and weight sums, shape
-    (..., n_bands, 2). Bands where either group is empty are left out.
+    Parameters
+    ----------
+    swy, sw : ndarray, shape (..., n_bands, 2)
+        Weighted outcome sums and weight sums of the "without" (0) and "with"
+        (1) rows per band.
+    bands : ndarray of bool, shape (n_bands,), optional
+        The bands to use (a bootstrap replicate uses those of its point
+        estimate); a result that lacks a group in one of them is NaN. By
+        default every band holding both groups is used.
+
+    Returns
+    -------
+    ndarray, shape (...)
+        The weighted mean of the within-band differences "with" - "without",
+        each band weighted by its total weight; NaN where nothing compares.
     """
     both = (sw[..., 0] > 0.0) & (sw[..., 1] > 0.0)
     rate = np.divide(swy, sw, out=np.zeros_like(swy), where=sw > 0.0)
-    band_w = np.where(both, sw.sum(axis=-1), 0.0)
+    use = both if bands is None else np.broadcast_to(bands, both.shape)
+    band_w = np.where(use, sw.sum(axis=-1), 0.0)
     diff = rate[..., 1] - rate[..., 0]
     num = np.asarray((band_w * diff).sum(axis=-1), dtype=np.float64)
     den = np.asarray(band_w.sum(axis=-1), dtype=np.float64)
-    # NaN where no band holds both groups (nothing to compare)
-    return np.divide(num, den, out=np.full_like(num, np.nan), where=den > 0.0)
+    valid = den > 0.0
+    if bands is not None:
+        valid &= np.all(both | ~use, axis=-1)
+    return np.divide(num, den, out=np.full_like(num, np.nan), where=valid)
 
 
 def _psu_sums(
     value: FloatArray, weight: FloatArray, band: IntArray, group: IntArray, psu: IntArray
 ) -> tuple[IntArray, FloatArray, FloatArray]:
-    """Weighted sums by (PSU, band, group): outcome and weight, shape (n_psu, n_bands, 2)."""
+    """Weighted sums by (PSU, band, group).
+
+    Returns
+    -------
+    psus : ndarray, shape (n_psu,)
+        The PSUs present, sorted.
+    swy, sw : ndarray, shape (n_psu, n_bands, 2)
+        Sums of ``weight * value`` and of ``weight``.
+    """
     psus, pidx = np.unique(psu, return_inverse=True)
     cell = (pidx * len(BANDS) + band) * 2 + group
     size = len(psus) * len(BANDS) * 2
@@ -330,11 +371,10 @@ def _psu_sums(
     # (float even for an empty selection, where bincount returns integers)
     swy = np.bincount(cell, weights=weight * value, minlength=size).astype(np.float64)
     sw = np.bincount(cell, weights=weight, minlength=size).astype(np.float64)
-    swy, sw = swy.reshape(shape), sw.reshape(shape)
-    return psus, swy, sw
+    return psus, swy.reshape(shape), sw.reshape(shape)
 
 
-def _field_difference(
+def _field_replicates(
     y: FloatArray,
     w: FloatArray,
     band: IntArray,
@@ -342,24 +382,51 @@ def _field_difference(
     psu: IntArray,
     draws: FloatArray,
     all_psus: IntArray,
-) -> tuple[float, tuple[float, float]]:
-    """Point difference and its PSU-bootstrap 95 % interval.
+) -> tuple[float, FloatArray]:
+    """Point difference and its PSU-bootstrap replicates.
 
     A cluster bootstrap written here rather than ``scipy.stats.bootstrap``,
     which resamples observations, not clusters: each replicate draws the
     survey's PSUs with replacement (``draws``, their multiplicities) and
     recomputes the difference from per-PSU sums, so the replicates cost one
     matrix product.
+
+    Parameters
+    ----------
+    y, w : ndarray, shape (n,)
+        Outcome (0/1, or the models' P) and survey weight of the compared rows.
+    band, group, psu : ndarray of int, shape (n,)
+        Delta-V band index, 1 "with" / 0 "without", PSU.
+    draws : ndarray, shape (replicates, n_psu)
+        Multiplicity of every PSU of the survey in each replicate (:func:`_psu_draws`).
+    all_psus : ndarray, shape (n_psu,)
+        The survey's PSUs, sorted (the columns of ``draws``).
+
+    Returns
+    -------
+    point : float
+        NaN when no band holds both groups.
+    replicates : ndarray, shape (replicates,)
+        NaN for a replicate lacking a group in a band the point uses.
     """
     psus, swy, sw = _psu_sums(y, w, band, group, psu)
-    point = float(_standardised(swy.sum(axis=0), sw.sum(axis=0)))
-    if not np.isfinite(point):
-        return point, (point, point)
-    # draws: (replicates, len(all_psus)) multiplicities of every PSU of the data
+    tot_y, tot_w = swy.sum(axis=0), sw.sum(axis=0)
+    point = float(_standardised(tot_y, tot_w))
+    bands = (tot_w[:, 0] > 0.0) & (tot_w[:, 1] > 0.0)
     mult = draws[:, np.searchsorted(all_psus, psus)]
-    reps = _standardised(np.einsum("bp,pkg->bkg", mult, swy), np.einsum("bp,pkg->bkg", mult, sw))
-    lo, hi = np.nanpercentile(reps, [2.5, 97.5])
-    return point, (float(lo), float(hi))
+    reps = _standardised(
+        np.einsum("bp,pkg->bkg", mult, swy), np.einsum("bp,pkg->bkg", mult, sw), bands
+    )
+    return point, reps
+
+
+def _interval(reps: FloatArray) -> tuple[tuple[float, float], float]:
+    """Percentile 95 % interval of the valid replicates, and the share dropped (NaN)."""
+    ok = np.isfinite(reps)
+    if not ok.any():
+        return (math.nan, math.nan), 1.0
+    lo, hi = np.percentile(reps[ok], [2.5, 97.5])
+    return (float(lo), float(hi)), float(1.0 - ok.mean())
 
 
 def restraint_effects(
@@ -379,6 +446,7 @@ def restraint_effects(
     replicates : int, optional
         PSU bootstrap replicates.
     seed : int, optional
+        Seed of the PSU resamples (:func:`group_rates` draws the same ones).
 
     Returns
     -------
@@ -398,17 +466,11 @@ def restraint_effects(
             group = with_.astype(np.int64)
             fields = []
             for subset in (sel, sel & m["recent"]):
-                fields.append(
-                    _field_difference(
-                        y[subset],
-                        w[subset],
-                        band[subset],
-                        group[subset],
-                        psu[subset],
-                        draws,
-                        all_psus,
-                    )
+                point, reps = _field_replicates(
+                    y[subset], w[subset], band[subset], group[subset], psu[subset], draws, all_psus
                 )
+                ci, dropped = _interval(reps) if math.isfinite(point) else ((point, point), 1.0)
+                fields.append((point, ci, dropped))
             _, swy, sw = _psu_sums(p_lpm[sel], w[sel], band[sel], group[sel], psu[sel])
             out.append(
                 RestraintEffect(
@@ -421,6 +483,8 @@ def restraint_effects(
                     field_recent=fields[1][0],
                     field_recent_ci95=fields[1][1],
                     model=float(_standardised(swy.sum(axis=0), sw.sum(axis=0))),
+                    dropped=fields[0][2],
+                    dropped_recent=fields[1][2],
                 )
             )
     return tuple(out)
@@ -437,6 +501,8 @@ class GroupRate:
     field_ci95: tuple[float, float]
     #: the occupant models' mean P(ISS >= 15) over the same occupants (weighted)
     model: float
+    #: share of the bootstrap replicates dropped (none of the cell's PSUs drawn)
+    dropped: float = 0.0
 
 
 def group_rates(
@@ -450,6 +516,16 @@ def group_rates(
 
     The field rates carry 95 % intervals from the PSU bootstrap of
     :func:`restraint_effects` (the same resamples for the same seed).
+
+    Parameters
+    ----------
+    cases : sequence of FieldCase
+    p_lpm : ndarray, shape (n,)
+        The occupant models' P(ISS >= 15) of each case.
+    replicates : int, optional
+        PSU bootstrap replicates.
+    seed : int, optional
+        Seed of the PSU resamples.
 
     Returns
     -------
@@ -472,15 +548,16 @@ def group_rates(
             mult = draws[:, np.searchsorted(all_psus, psus)]
             num, den = mult @ swy, mult @ sw
             reps = np.divide(num, den, out=np.full_like(num, np.nan), where=den > 0.0)
-            lo, hi = np.nanpercentile(reps, [2.5, 97.5])
+            ci, dropped = _interval(reps)
             out.append(
                 GroupRate(
                     group=name,
                     band=label,
                     n=int(sel.sum()),
                     field=float(swy.sum() / sw.sum()),
-                    field_ci95=(float(lo), float(hi)),
+                    field_ci95=ci,
                     model=float(np.average(p_lpm[sel], weights=w[sel])),
+                    dropped=dropped,
                 )
             )
     return tuple(out)
@@ -491,6 +568,8 @@ class FieldCheck:
     """Weighted figures of the occupant models against the NASS frontal outcomes."""
 
     n: int
+    #: primary sampling units among the cases (the bootstrap's clusters)
+    n_psu: int
     prevalence: float
     auc_lpm: float
     auc_baseline: float
@@ -554,6 +633,7 @@ def run_field_check(models: EngineModels, csv_path: Path | None = None) -> Field
         by_threshold[t] = (float(np.average(p_lpm >= t, weights=w)), 1.0 - ut_t, ot_t)
     return FieldCheck(
         n=len(cases),
+        n_psu=len({c.psu for c in cases}),
         prevalence=float(np.average(y, weights=w)),
         auc_lpm=float(roc_auc_score(y, p_lpm, sample_weight=w)),
         auc_baseline=float(roc_auc_score(y, p_base, sample_weight=w)),
@@ -611,7 +691,7 @@ def _markdown(fc: FieldCheck) -> str:
         lines.append(
             f"| {t:.3f}{mark} | {100 * flagged:.1f} % | {100 * se:.1f} % | {100 * ot:.1f} % |"
         )
-    lines += _restraint_markdown(fc.restraints)
+    lines += _restraint_markdown(fc.restraints, fc.n_psu)
     lines += _rates_markdown(fc.rates)
     lines += [
         "",
@@ -627,8 +707,9 @@ def _markdown(fc: FieldCheck) -> str:
 
 
 def _pp(x: float) -> str:
-    """A difference of rates in percentage points, signed."""
-    return f"{100 * x:+.1f}"
+    """A difference of rates in percentage points, signed ("+0.0", not "-0.0")."""
+    text = f"{100 * x:+.1f}"
+    return "+0.0" if text == "-0.0" else text
 
 
 def _ci(ci: tuple[float, float]) -> str:
@@ -639,17 +720,17 @@ def _excludes_zero(ci: tuple[float, float]) -> bool:
     return ci[0] > 0.0 or ci[1] < 0.0
 
 
-def _restraint_markdown(effects: Sequence[RestraintEffect]) -> list[str]:
+def _restraint_markdown(effects: Sequence[RestraintEffect], n_psu: int) -> list[str]:
     lines = [
         "",
         "## Restraint effects: the field against the occupant models",
         "",
         "Difference in percentage points, with the restraint minus without (negative: the",
         "restraint lowers the risk), standardised over the delta-V bands; the field's 95 %",
-        f"intervals from {BOOTSTRAP_REPLICATES:,} bootstrap resamples of the 24 primary sampling",
-        f"units (seed {BOOTSTRAP_SEED}). Observational data: the airbag-equipped vehicles are",
-        "newer, so the field difference is also given over vehicles of model year "
-        f"{COMMON_MODEL_YEAR} and later.",
+        f"intervals from {BOOTSTRAP_REPLICATES:,} bootstrap resamples of the {n_psu} primary",
+        f"sampling units (seed {BOOTSTRAP_SEED}). Observational data: the airbag-equipped",
+        "vehicles are newer, so the field difference is also given over vehicles of model",
+        f"year {COMMON_MODEL_YEAR} and later.",
         "",
         "| population | contrast | occupants with / without | field | field, MY >= "
         f"{COMMON_MODEL_YEAR} | occupant models |",
@@ -669,10 +750,19 @@ def _restraint_markdown(effects: Sequence[RestraintEffect]) -> list[str]:
             if _excludes_zero(e.field_ci95)
             else "not distinguishable from zero"
         )
+        if min(abs(e.field_ci95[0]), abs(e.field_ci95[1])) < BORDERLINE_POINTS / 100.0:
+            verdict += f"; a bound within {BORDERLINE_POINTS:g} point of zero: borderline"
         lines.append(
             f"- {CONTRASTS[name].capitalize()}, all occupants: field {_pp(e.field)} points "
             f"({verdict}), occupant models {_pp(e.model)} points."
         )
+    worst = max(effects, key=lambda e: max(e.dropped, e.dropped_recent))
+    where = f"MY >= {COMMON_MODEL_YEAR}" if worst.dropped_recent > worst.dropped else "all vehicles"
+    lines.append(
+        "- Bootstrap replicates dropped for lack of a group in a band the estimate uses: at"
+        f" most {100 * max(worst.dropped, worst.dropped_recent):.1f} % ({worst.population},"
+        f" {CONTRASTS[worst.contrast]}, {where})."
+    )
     belted = pooled["airbag_belted"]
     finding = (
         "shows no benefit of the bag to belted occupants distinguishable from zero"
