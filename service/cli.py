@@ -283,7 +283,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
 _HANDED_OVER: dict[str, tuple[str, str]] = {
     "build-surrogates": (
         "models.surrogate.build",
-        "build the PCE surrogate artifacts (offline; needs the `build` extra)",
+        "build the PCE surrogate artifacts (offline, resumable; numpy only, no chaospy)",
     ),
     "validate-surrogates": (
         "models.surrogate.validate",
