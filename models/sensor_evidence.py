@@ -8,10 +8,13 @@ track position switch (49 CFR 563 Table II "seat track position switch,
 foremost, status"), and few cars sense posture at all. An absent reading is
 not a reading at the nominal position with a sensor's error: the position is
 anywhere the evidence allows. :func:`resolve_sensor_evidence` turns the
-evidence into the range it allows, then into the reading and standard deviation
-of a uniform distribution over that range (centre, width / sqrt(12)), which the
-engine propagates like a sensor error; an explicit SD in the notification is
-kept. Each replacement is reported as an assumption.
+evidence into the range it allows, then into a reading and the standard
+deviation of a uniform distribution over that range (width / sqrt(12)), which
+the engine propagates like a sensor error; the reading is the range's centre
+for the seat track and the neutral posture (``NEUTRAL_LUMBAR_FLEXION_DEG``,
+5.8 deg, not the 12.5 deg centre of 0-25 deg) for an unsensed posture. An
+explicit SD in the notification is kept. Each replacement is reported as an
+assumption.
 """
 
 from __future__ import annotations

@@ -116,7 +116,7 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         },
         "triage_code": {
             "version": "0.2.0",
-            "sha256": "acf23bf4f092d3094d93c33dd4289f8e624d78d134158b9d6b9f1f0b9cf814ff",
+            "sha256": "9390842e7fd46602e0c715241f4af9a363325e4c8e1c4f1072b8a718aa593960",
         },
     },
     "timings_ms": {"pulse": 0.9, "occupants": 12.4, "engine_total": 13.3},
