@@ -1,13 +1,15 @@
-"""Where the service sends a driver to a trauma center: the ISS15+ decision over delta-V.
+"""Where the occupant models would send a driver: their ISS15+ decision over delta-V.
 
 For each impact mode, body and restraint configuration, the driver of the
 default vehicle (left-hand drive) is triaged by :func:`models.triage.triage`,
 exactly as a notification with a summary pulse (delta-V and PDOF) would be,
-over delta-V 5-120 km/h. The map gives, per configuration, P(ISS >= 15) against
-delta-V with the mode's decision threshold, and the lowest delta-V from which
-the decision is positive. It shows the decision policy to the people who have
-to live with it (trauma systems, call centres) and is the starting point of
-its calibration.
+over delta-V 5-120 km/h. The map gives, per configuration, the occupant models'
+P(ISS >= 15) against delta-V with the mode's threshold, and the lowest delta-V
+from which their own decision (``occupant_model``, the physics second opinion)
+is positive. The service decides on the field model's P(MAIS 3+) instead
+(``docs/field/MODEL_CARD.md`` draws its curves); this map shows why: the
+physics alone is milder than the field for belted occupants in frontal
+crashes and harsher in near-side ones.
 
 PDOF per mode (deg, clockwise from straight ahead): frontal 0, near side 270
 (the driver's side of a left-hand-drive car), far side 90, rear 180.
@@ -123,15 +125,18 @@ def decision_rows(
                 for dv in delta_v_kmh:
                     result = triage(_notification(mode, body, belted, airbag, dv), models)
                     occ = result.occupants[0]
+                    decision = occ.occupant_model
+                    if decision is None:
+                        raise RuntimeError(f"no occupant model for {mode} at {dv} km/h")
                     rows.append(
                         DecisionRow(
                             mode=mode,
                             body=body,
                             restraint=_label(mode, label),
                             delta_v_kmh=float(dv),
-                            probability=occ.triage.probability,
-                            threshold=occ.triage.threshold,
-                            iss15_plus=occ.triage.iss15_plus,
+                            probability=decision.probability,
+                            threshold=decision.threshold,
+                            iss15_plus=decision.iss15_plus,
                             iss=-1 if occ.iss is None else occ.iss.estimate,
                             method=occ.method,
                         )

@@ -29,6 +29,8 @@ __all__ = [
     "SeatTrackSource",
     "Sex",
     "SummaryPulse",
+    "DUMMY_STATURE_MASS",
+    "nearest_body",
     "summary_notification",
 ]
 
@@ -61,6 +63,45 @@ class Body(StrEnum):
 
     MALE_50TH = "male_50th"
     FEMALE_5TH = "female_5th"
+
+
+#: Hybrid III anthropometry used to map stature and mass to the nearer dummy
+#: (occupant-lpm-notes.md section 2): 50th male 175 cm / 77.7 kg;
+#: 5th female 151 cm / 49.1 kg [S].
+DUMMY_STATURE_MASS: dict[Body, tuple[float, float]] = {
+    Body.MALE_50TH: (175.0, 77.7),
+    Body.FEMALE_5TH: (151.0, 49.1),
+}
+
+
+def nearest_body(stature_cm: float | None, mass_kg: float | None) -> Body | None:
+    """The dummy nearer to a stature and mass (relative squared distance).
+
+    Parameters
+    ----------
+    stature_cm : float or None
+        Occupant stature, cm.
+    mass_kg : float or None
+        Occupant mass, kg.
+
+    Returns
+    -------
+    Body or None
+        None when neither is known.
+    """
+    if stature_cm is None and mass_kg is None:
+        return None
+
+    def distance(b: Body) -> float:
+        stature, mass = DUMMY_STATURE_MASS[b]
+        d = 0.0
+        if stature_cm is not None:
+            d += ((stature_cm - stature) / stature) ** 2
+        if mass_kg is not None:
+            d += ((mass_kg - mass) / mass) ** 2
+        return d
+
+    return min(DUMMY_STATURE_MASS, key=distance)
 
 
 class Sex(StrEnum):
@@ -199,6 +240,9 @@ class Occupant:
         Where the seat position comes from; anything but ``SENSOR`` makes the
         engine replace ``seat_track_mm`` and its SD by the range the evidence
         allows (:mod:`models.sensor_evidence`).
+    stature_cm, mass_kg : float or None
+        Occupant stature (cm) and mass (kg) where known (the field risk model
+        may use them; the occupant models use `body`).
     """
 
     seat: Seat
@@ -216,6 +260,8 @@ class Occupant:
     seat_track_sd_mm: float | None = None
     posture_sensed: bool = True
     seat_track_source: SeatTrackSource = SeatTrackSource.SENSOR
+    stature_cm: float | None = None
+    mass_kg: float | None = None
 
 
 @dataclass(frozen=True)

@@ -1,15 +1,19 @@
 """The orchestrator: one notification in, one triage result out.
 
 Flow per notification: the pulse is processed once (`models.pulse`); per
-occupant the impact mode is classified (`models.impact_mode`); occupants inside
-an occupant model's coverage are simulated by that model (`models.lpm`), whose
-injury measures give region AIS, ISS and P(ISS >= 15) (`models.injury`), less
-the risk curves' zero-load floor (`models.risk_calibration`); the
-95% intervals come from the PCE surrogates (`models.surrogate`) when loaded,
-else from direct runs over the sensor-uncertainty box. All other occupants are
-answered by the statistical baseline (`models.baseline`), which is also kept for
-every occupant as a second opinion. The case-level decision is the worst
-occupant's.
+occupant the impact mode is classified (`models.impact_mode`). The decision is
+the field risk model's (`models.field`): P(MAIS 3+), fitted on real NASS-CDS
+crashes, from what the notification carries (delta-V, crash mode incl.
+rollover, belt, age, sex, body mass index, multiple impacts), decided at the
+configured operating point. Occupants inside an occupant model's coverage are
+also simulated by that model (`models.lpm`): its injury measures give region
+AIS, ISS and P(ISS >= 15) (`models.injury`), less the risk curves' zero-load
+floor (`models.risk_calibration`), with 95% intervals from the PCE surrogates
+(`models.surrogate`) when loaded, else from direct runs over the
+sensor-uncertainty box. That answer explains the decision (which body regions,
+which measures) and is kept with its own decision as a second opinion, as is the
+statistical baseline's (`models.baseline`) for every occupant. The case-level
+decision is the worst occupant's.
 
 Everything here is a pure function of the notification and the loaded models:
 the same inputs and model versions give the same result, bit for bit (only
@@ -22,18 +26,30 @@ import dataclasses
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from enum import StrEnum
 from functools import lru_cache
 from pathlib import Path
 
 from models import ENGINE_VERSION
 from models.baseline.logistic import BaselineFeatures, BaselineModel, load_default
+from models.constants import DEFAULT_POSTURE_SD_DEG, DEFAULT_SEAT_TRACK_SD_MM, Z_95
+from models.field.features import FieldInputs, FieldMode, field_inputs
+from models.field.model import FieldModel, FieldPrediction
+from models.field.model import load_default as load_field_model
 from models.impact_mode import ImpactClassification, ImpactMode, classify_impact
 from models.injury.assessment import InjuryMeasures
 from models.lpm.domain import POSTURE_RANGE_DEG, SEAT_TRACK_RANGE_MM, clamp
 from models.lpm.fingerprint import lpm_code_sha256, sources_sha256
 from models.lpm.params import ParameterSet, available_parameter_sets, load_parameter_set
 from models.lpm.simulate import LpmResult, simulate, warm_up
-from models.notification import AirbagState, Body, CrashNotification, Occupant, Seat
+from models.notification import (
+    AirbagState,
+    Body,
+    CrashNotification,
+    Occupant,
+    Seat,
+    SeatTrackSource,
+)
 from models.pulse import ProcessedPulse, process_pulse
 from models.risk_calibration import (
     CALIBRATION_NAME,
@@ -57,6 +73,10 @@ __all__ = [
     "DEFAULT_POSTURE_SD_DEG",
     "DEFAULT_SEAT_TRACK_SD_MM",
     "LPM_THRESHOLDS",
+    "LPM_OUTCOME",
+    "BASELINE_OUTCOME",
+    "IntervalMethod",
+    "Method",
     "RECOMMENDATION_NO_TRAUMA_INDICATION",
     "RECOMMENDATION_TRAUMA_CENTER",
     "TRIAGE_SOURCES",
@@ -71,6 +91,9 @@ __all__ = [
     "UnknownVehicleModel",
     "decide",
     "load_engine_models",
+    "occupant_evidence",
+    "notification_field_inputs",
+    "OccupantEvidence",
     "load_surrogates",
     "simulate_notification",
     "triage",
@@ -104,12 +127,11 @@ LPM_THRESHOLDS: Mapping[ImpactMode, float] = {
     ImpactMode.NEAR_SIDE: 0.05,
     ImpactMode.FAR_SIDE: 0.05,
 }
-#: Default sensor standard deviations: posture within 5 deg and seat position within
-#: 5 cm, 95% of the time, Gaussian (issue 5): SD = bound / 1.96.
-DEFAULT_POSTURE_SD_DEG = 5.0 / 1.959964
-DEFAULT_SEAT_TRACK_SD_MM = 50.0 / 1.959964
-#: z of a two-sided 95% interval.
-_Z95 = 1.959964
+#: Outcome of the occupant models' probability.
+LPM_OUTCOME = "ISS15+"
+#: Outcome of the statistical baseline: police-reported incapacitating or fatal
+#: injury (KABCO A or K), NASS-CDS 1997-2000.
+BASELINE_OUTCOME = "police_A+K"
 #: Sources (under models/) of the orchestration itself: how a notification becomes
 #: model inputs and how the answers become a decision. Their checksum is recorded
 #: with every case (``triage_code``), beside those of the models they call.
@@ -138,6 +160,28 @@ class UnknownVehicleModel(ValueError):
     """The notification names a vehicle parameter set that is not loaded."""
 
 
+class IntervalMethod(StrEnum):
+    """Where an occupant model's 95% intervals come from."""
+
+    #: the PCE surrogates: sensor samples through the point surrogate and its
+    #: bootstrap replicates, widened by held-out calibrated margins
+    PCE_BOOTSTRAP = "pce_bootstrap"
+    #: direct occupant-model runs over the +/-1.96 SD sensor box
+    LPM_SENSOR_BOX = "lpm_sensor_box"
+
+
+class Method(StrEnum):
+    """How an occupant was answered.
+
+    The decision is always the field model's. ``LPM``: an occupant model ran and
+    explains it (measures, region AIS, ISS); ``FIELD``: no occupant model applies
+    (PDOF between the models' ranges, a second-row seat) or it failed.
+    """
+
+    LPM = "lpm"
+    FIELD = "field"
+
+
 @dataclass(frozen=True)
 class ModelInfo:
     """Name, version and checksum of one model artifact (recorded with every case)."""
@@ -149,13 +193,36 @@ class ModelInfo:
 
 @dataclass(frozen=True)
 class TriageDecision:
-    """An ISS15+ decision on a probability with its 95% interval."""
+    """A trauma-center decision on a probability with its 95% interval.
+
+    Attributes
+    ----------
+    iss15_plus : bool
+        Positive: likely ISS 15+, transport to a Level I trauma center.
+    probability : float
+        Probability of `outcome`.
+    probability_ci95 : (float, float)
+    threshold : float
+        Positive when ``probability >= threshold``.
+    recommendation : str
+    outcome : str
+        What `probability` is a probability of (``MAIS3+`` for the field model,
+        ``ISS15+`` for the occupant models, the police-reported outcome for the
+        baseline).
+    model : str
+        Name of the model that gave it.
+    operating_point : str or None
+        The named operating point the threshold belongs to (field model).
+    """
 
     iss15_plus: bool
     probability: float
     probability_ci95: tuple[float, float]
     threshold: float
     recommendation: str
+    outcome: str = LPM_OUTCOME
+    model: str = "occupant_models"
+    operating_point: str | None = None
 
 
 @dataclass(frozen=True)
@@ -188,19 +255,27 @@ class SensorInputs:
 
 @dataclass(frozen=True)
 class OccupantTriage:
-    """The triage of one occupant."""
+    """The triage of one occupant.
+
+    `triage` is the decision (the field model's); `occupant_model` the occupant
+    models' own decision on their P(ISS >= 15) (None without an occupant model),
+    `baseline` the statistical baseline's: both second opinions. The remaining
+    fields are the occupant model's explanation (None without one).
+    """
 
     seat: Seat
     body: Body
     impact: ImpactClassification
-    method: str
+    method: Method
     triage: TriageDecision
     baseline: TriageDecision
+    field_mode: FieldMode = FieldMode.FRONTAL
+    occupant_model: TriageDecision | None = None
     iss: IssEstimate | None = None
     region_ais: Mapping[str, int] | None = None
     measures: Mapping[str, float] | None = None
     measures_ci95: Mapping[str, tuple[float, float]] | None = None
-    interval_method: str = "coefficient_covariance"
+    interval_method: IntervalMethod | None = None
     point_outside_interval: bool = False
     #: occupant models only: P(ISS >= 15) from the risk curves before the
     #: zero-load correction, and the same occupant's P(ISS >= 15) at zero load
@@ -238,8 +313,14 @@ class EngineModels:
     surrogates : SurrogateLibrary or None
         PCE surrogates for the confidence intervals; None: the interim interval
         from direct occupant-model runs over the sensor-uncertainty box.
+    field : FieldModel or None
+        The field risk model the decision is made with; None only for offline
+        tools that compute the occupant models' answers alone
+        (:func:`occupant_model_answers`): :func:`triage` needs it.
+    operating_point : str or None
+        Named operating point of the field model (None: the artifact's default).
     threshold_override : float or None
-        Replaces every model's own decision threshold when set.
+        Replaces the operating point's thresholds when set.
     posture_sd_deg, seat_track_sd_mm : float
         Sensor standard deviations used when a notification gives none.
     """
@@ -247,6 +328,8 @@ class EngineModels:
     baseline: BaselineModel
     parameter_sets: Mapping[str, ParameterSet]
     surrogates: SurrogateLibrary | None = None
+    field: FieldModel | None = None
+    operating_point: str | None = None
     threshold_override: float | None = None
     posture_sd_deg: float = DEFAULT_POSTURE_SD_DEG
     seat_track_sd_mm: float = DEFAULT_SEAT_TRACK_SD_MM
@@ -263,6 +346,9 @@ class EngineModels:
         """
         b = self.baseline
         infos = {"baseline": ModelInfo(name=b.name, version=b.version, sha256=b.sha256)}
+        if self.field is not None:
+            f = self.field
+            infos["field_model"] = ModelInfo(name=f.name, version=f.version, sha256=f.sha256)
         names = sorted(self.parameter_sets) if vehicle_model is None else [vehicle_model]
         for name in names:
             ps = self.parameter_sets[name]
@@ -312,10 +398,13 @@ def load_surrogates(directory: Path | None = None) -> SurrogateLibrary | None:
 def load_engine_models(
     threshold_override: float | None = None,
     *,
+    operating_point: str | None = None,
+    field_artifact: Path | None = None,
     posture_sd_deg: float = DEFAULT_POSTURE_SD_DEG,
     seat_track_sd_mm: float = DEFAULT_SEAT_TRACK_SD_MM,
     surrogate_dir: Path | None = None,
     use_surrogates: bool = True,
+    use_field: bool = True,
     warm: bool = True,
 ) -> EngineModels:
     """Load and verify the shipped model artifacts, and warm the compiled kernels.
@@ -323,8 +412,25 @@ def load_engine_models(
     Raises
     ------
     ValueError
-        When an artifact is missing, malformed, or does not match the code.
+        When an artifact is missing, malformed, altered, or does not match the
+        code, or `operating_point` is not one the field model defines.
     """
+    field_model: FieldModel | None = None
+    if use_field:
+        field_model = (
+            load_field_model()
+            if field_artifact is None
+            else FieldModel.from_artifact(field_artifact)
+        )
+    if (
+        field_model is not None
+        and operating_point is not None
+        and operating_point not in field_model.operating_points
+    ):
+        raise ValueError(
+            f"unknown operating point {operating_point!r}; the field model defines "
+            + ", ".join(sorted(field_model.operating_points))
+        )
     surrogates = load_surrogates(surrogate_dir) if use_surrogates else None
     parameter_sets = {name: load_parameter_set(name) for name in available_parameter_sets()}
     if warm:
@@ -333,13 +439,23 @@ def load_engine_models(
         baseline=load_default(),
         parameter_sets=parameter_sets,
         surrogates=surrogates,
+        field=field_model,
+        operating_point=operating_point,
         threshold_override=threshold_override,
         posture_sd_deg=posture_sd_deg,
         seat_track_sd_mm=seat_track_sd_mm,
     )
 
 
-def decide(probability: float, ci95: tuple[float, float], threshold: float) -> TriageDecision:
+def decide(
+    probability: float,
+    ci95: tuple[float, float],
+    threshold: float,
+    *,
+    outcome: str = LPM_OUTCOME,
+    model: str = "occupant_models",
+    operating_point: str | None = None,
+) -> TriageDecision:
     """Turn a probability into a decision at `threshold` (positive when p >= threshold)."""
     positive = probability >= threshold
     return TriageDecision(
@@ -350,6 +466,9 @@ def decide(probability: float, ci95: tuple[float, float], threshold: float) -> T
         recommendation=(
             RECOMMENDATION_TRAUMA_CENTER if positive else RECOMMENDATION_NO_TRAUMA_INDICATION
         ),
+        outcome=outcome,
+        model=model,
+        operating_point=operating_point,
     )
 
 
@@ -366,12 +485,34 @@ def _baseline_decision(
             sex=occupant.sex,
         )
     )
+    return decide(
+        prediction.probability,
+        prediction.ci95,
+        models.baseline.threshold,
+        outcome=BASELINE_OUTCOME,
+        model=models.baseline.name,
+    )
+
+
+def _field_decision(
+    field_model: FieldModel,
+    models: EngineModels,
+    prediction: FieldPrediction,
+) -> TriageDecision:
+    name = models.operating_point or field_model.default_operating_point
     threshold = (
         models.threshold_override
         if models.threshold_override is not None
-        else models.baseline.threshold
+        else field_model.threshold(prediction.mode, name)
     )
-    return decide(prediction.probability, prediction.ci95, threshold)
+    return decide(
+        prediction.probability,
+        prediction.ci95,
+        threshold,
+        outcome=field_model.outcome,
+        model=f"{field_model.name}@{field_model.version}",
+        operating_point=None if models.threshold_override is not None else name,
+    )
 
 
 def _worst(decisions: list[TriageDecision]) -> TriageDecision:
@@ -389,7 +530,8 @@ def _triage_code_info() -> ModelInfo:
 def _used_models(models: EngineModels, vehicle_model: str, used_lpm: bool) -> dict[str, ModelInfo]:
     infos = models.model_infos(vehicle_model)
     if not used_lpm:
-        return {"baseline": infos["baseline"], "triage_code": infos["triage_code"]}
+        keep = ("baseline", "field_model", "triage_code")
+        return {k: infos[k] for k in keep if k in infos}
     return infos
 
 
@@ -445,8 +587,8 @@ def _sensor_box(
     posture and seat track within their 95% sensor bounds (clamped to the domain).
     """
     runs = []
-    for dp in (-_Z95, 0.0, _Z95):
-        for dt in (-_Z95, 0.0, _Z95):
+    for dp in (-Z_95, 0.0, Z_95):
+        for dt in (-Z_95, 0.0, Z_95):
             if dp == 0.0 and dt == 0.0:
                 continue
             shifted = dataclasses.replace(
@@ -469,6 +611,27 @@ def _mode_airbag_deployed(occupant: Occupant, mode: ImpactMode) -> bool:
     return occupant.frontal_airbag is AirbagState.DEPLOYED
 
 
+@dataclass(frozen=True)
+class _LpmAnswer:
+    """An occupant model's answer for one occupant (the explanation of a decision)."""
+
+    decision: TriageDecision
+    iss: IssEstimate
+    region_ais: Mapping[str, int]
+    measures: Mapping[str, float]
+    measures_ci95: Mapping[str, tuple[float, float]]
+    interval_method: IntervalMethod
+    point_outside_interval: bool
+    probability_uncorrected: float
+    probability_zero_load: float
+    sensor_inputs: SensorInputs
+
+
+def _sensed(occupant: Occupant) -> bool:
+    """Posture and seat position both come from sensor readings."""
+    return occupant.posture_sensed and occupant.seat_track_source is SeatTrackSource.SENSOR
+
+
 def _lpm_occupant(
     index: int,
     occupant: Occupant,
@@ -476,10 +639,10 @@ def _lpm_occupant(
     pulse: ProcessedPulse,
     params: ParameterSet,
     models: EngineModels,
-    baseline: TriageDecision,
     assumptions: list[str],
-) -> OccupantTriage | None:
-    """Answer one in-coverage occupant with its occupant model; None to fall back."""
+) -> _LpmAnswer | None:
+    """Answer one in-coverage occupant with its occupant model; None when it fails."""
+    sensed = _sensed(occupant)
     occupant = resolve_sensor_evidence(occupant, index, assumptions)
     lpm_occupant = _in_domain(occupant, index, assumptions)
     if impact.mode is ImpactMode.NEAR_SIDE and occupant.side_airbag is None:
@@ -491,7 +654,7 @@ def _lpm_occupant(
     if nominal.assessment is None:
         assumptions.append(
             f"occupants[{index}]: occupant model failed ({nominal.message}); "
-            "statistical baseline used"
+            "the field model decides without its explanation"
         )
         return None
     posture_sd = occupant.posture_sd_deg or models.posture_sd_deg
@@ -543,7 +706,17 @@ def _lpm_occupant(
             for k, v in uncertainty.measures_ci95.items()
             if k in measures
         }
-        method = "pce_bootstrap"
+        method = IntervalMethod.PCE_BOOTSTRAP
+        if not sensed:
+            # a posture or seat position that was not sensed is a spread, not a
+            # reading: the point estimate is the expectation over the spread the
+            # interval propagates, not the value at one assumed posture
+            p = float(uncertainty.p_iss15)
+            assumptions.append(
+                f"occupants[{index}]: occupant-model P(ISS >= 15) is the mean over the "
+                "unsensed posture / seat position spread; measures, region AIS and ISS "
+                "are those of the run at the assumed posture and seat position"
+            )
         tol = P_RESOLUTION  # the surrogate's resolution of P near 0 and 1
         outside = not (p_ci[0] - tol <= p <= p_ci[1] + tol) or not (
             iss_ci[0] - 0.5 <= iss <= iss_ci[1] + 0.5
@@ -570,31 +743,16 @@ def _lpm_occupant(
             values = [_measures_dict(r.measures).get(key) for r in box]
             finite = [v for v in values if v is not None]
             measures_ci[key] = (min(finite), max(finite))
-        method = "lpm_sensor_box"
+        method = IntervalMethod.LPM_SENSOR_BOX
         outside = False
-    threshold = (
-        models.threshold_override
-        if models.threshold_override is not None
-        else LPM_THRESHOLDS[impact.mode]
-    )
     # the thresholds apply to the risk attributable to the crash loads: remove the
-    # risk curves' zero-load floor from the point and from the interval (the
-    # surrogates are built at the default age, so their floor is the default age's)
+    # risk curves' zero-load floor from the point and from the interval, at the
+    # occupant's age (the direct run and the surrogate both use it)
     p0 = zero_load_probability(nominal.measures, occupant.body, occupant.age_years, impact.mode)
-    p0_ci = (
-        zero_load_probability(nominal.measures, occupant.body, None, impact.mode)
-        if method == "pce_bootstrap"
-        else p0
-    )
     p_corrected = corrected_probability(p, p0)
-    p_ci_corrected = (corrected_probability(p_ci[0], p0_ci), corrected_probability(p_ci[1], p0_ci))
-    return OccupantTriage(
-        seat=occupant.seat,
-        body=occupant.body,
-        impact=impact,
-        method="lpm",
-        triage=decide(p_corrected, p_ci_corrected, threshold),
-        baseline=baseline,
+    p_ci_corrected = (corrected_probability(p_ci[0], p0), corrected_probability(p_ci[1], p0))
+    return _LpmAnswer(
+        decision=decide(p_corrected, p_ci_corrected, LPM_THRESHOLDS[impact.mode]),
         iss=IssEstimate(estimate=iss, ci95=iss_ci),
         region_ais=dict(nominal.assessment.region_ais),
         measures=measures,
@@ -612,6 +770,172 @@ def _lpm_occupant(
     )
 
 
+def _field_assumptions(
+    index: int, occupant: Occupant, prediction: FieldPrediction, field_model: FieldModel
+) -> list[str]:
+    out = []
+    imp = field_model.imputation
+    if "age_years" in prediction.imputed:
+        out.append(
+            f"occupants[{index}]: age unknown: the field model uses the calibration "
+            f"median, {imp.age_years:g} years"
+        )
+    if "bmi" in prediction.imputed:
+        out.append(
+            f"occupants[{index}]: stature or mass unknown: the field model uses the "
+            f"calibration median body mass index, {imp.bmi:.1f} kg/m2"
+        )
+    if prediction.extrapolated:
+        out.append(
+            f"occupants[{index}]: delta-V above the field model's calibration data "
+            f"(largest {field_model.delta_v_max_kmh:.0f} km/h): its probability is extrapolated"
+        )
+    if not occupant.seat.front_row:
+        out.append(
+            f"occupants[{index}]: {occupant.seat.value} seat: the field model decides (its "
+            "data have no seat column); the occupant models are of the front row"
+        )
+    return out
+
+
+@dataclass(frozen=True)
+class OccupantEvidence:
+    """What the engine knows of one occupant before the field model decides.
+
+    Attributes
+    ----------
+    index : int
+    impact : ImpactClassification
+    field_inputs : FieldInputs
+        The field model's inputs.
+    baseline : TriageDecision
+        The statistical baseline's decision.
+    occupant_model : _LpmAnswer or None
+        The occupant model's answer (None out of coverage or when it failed).
+    """
+
+    index: int
+    impact: ImpactClassification
+    field_inputs: FieldInputs
+    baseline: TriageDecision
+    occupant_model: _LpmAnswer | None
+
+
+def _occupant_evidence(
+    index: int,
+    occupant: Occupant,
+    notification: CrashNotification,
+    pulse: ProcessedPulse,
+    models: EngineModels,
+    assumptions: list[str],
+) -> OccupantEvidence:
+    impact = classify_impact(pulse.pdof_deg, occupant.seat, notification.drive_side)
+    answer: _LpmAnswer | None = None
+    if impact.in_lpm_coverage:
+        params = models.parameter_sets[notification.vehicle_model]
+        answer = _lpm_occupant(index, occupant, impact, pulse, params, models, assumptions)
+    elif occupant.seat.front_row:
+        assumptions.append(
+            f"occupants[{index}]: PDOF {impact.pdof_deg:.0f} deg is outside every occupant "
+            "model's coverage; the field model decides without an occupant-model explanation"
+        )
+    return OccupantEvidence(
+        index=index,
+        impact=impact,
+        field_inputs=field_inputs(
+            occupant,
+            pulse.delta_v_kmh,
+            impact.mode,
+            multiple_impacts=notification.multiple_impacts,
+            rollover=notification.rollover,
+        ),  # as notification_field_inputs
+        baseline=_baseline_decision(models, occupant, pulse, impact),
+        occupant_model=answer,
+    )
+
+
+def _occupant_triage(
+    occupant: Occupant, evidence: OccupantEvidence, decision: TriageDecision, mode: FieldMode
+) -> OccupantTriage:
+    answer = evidence.occupant_model
+    if answer is None:
+        return OccupantTriage(
+            seat=occupant.seat,
+            body=occupant.body,
+            impact=evidence.impact,
+            method=Method.FIELD,
+            triage=decision,
+            baseline=evidence.baseline,
+            field_mode=mode,
+        )
+    return OccupantTriage(
+        seat=occupant.seat,
+        body=occupant.body,
+        impact=evidence.impact,
+        method=Method.LPM,
+        triage=decision,
+        baseline=evidence.baseline,
+        field_mode=mode,
+        occupant_model=answer.decision,
+        iss=answer.iss,
+        region_ais=answer.region_ais,
+        measures=answer.measures,
+        measures_ci95=answer.measures_ci95,
+        interval_method=answer.interval_method,
+        point_outside_interval=answer.point_outside_interval,
+        probability_uncorrected=answer.probability_uncorrected,
+        probability_zero_load=answer.probability_zero_load,
+        sensor_inputs=answer.sensor_inputs,
+    )
+
+
+def notification_field_inputs(notification: CrashNotification) -> list[FieldInputs]:
+    """The field model's inputs for every occupant, as :func:`triage` builds them.
+
+    The pulse is processed and each occupant's impact classified exactly as in a
+    request; no occupant model runs (the offline fit and its tests use this).
+    """
+    pulse = process_pulse(notification.pulse)
+    out = []
+    for occupant in notification.occupants:
+        impact = classify_impact(pulse.pdof_deg, occupant.seat, notification.drive_side)
+        out.append(
+            field_inputs(
+                occupant,
+                pulse.delta_v_kmh,
+                impact.mode,
+                multiple_impacts=notification.multiple_impacts,
+                rollover=notification.rollover,
+            )
+        )
+    return out
+
+
+def occupant_evidence(
+    notification: CrashNotification, models: EngineModels
+) -> tuple[list[OccupantEvidence], list[str]]:
+    """Every occupant's evidence without a decision (offline fits and checks).
+
+    Needs no field model: the offline fit uses it to compute the field model's
+    inputs exactly as :func:`triage` does, and the occupant models' answers.
+
+    Returns
+    -------
+    evidence : list of OccupantEvidence
+        One per occupant, in order.
+    assumptions : list of str
+    """
+    if notification.vehicle_model not in models.vehicle_models:
+        raise UnknownVehicleModel(f"unknown vehicle model {notification.vehicle_model!r}")
+    pulse = process_pulse(notification.pulse)
+    assumptions: list[str] = []
+    out = [
+        _occupant_evidence(i, o, notification, pulse, models, assumptions)
+        for i, o in enumerate(notification.occupants)
+    ]
+    return out, assumptions
+
+
 def triage(notification: CrashNotification, models: EngineModels) -> TriageResult:
     """Triage every occupant of a notification.
 
@@ -619,6 +943,7 @@ def triage(notification: CrashNotification, models: EngineModels) -> TriageResul
     ----------
     notification : CrashNotification
     models : EngineModels
+        With a field model.
 
     Returns
     -------
@@ -629,8 +954,12 @@ def triage(notification: CrashNotification, models: EngineModels) -> TriageResul
     UnknownVehicleModel
         When `notification.vehicle_model` names no loaded parameter set.
     ValueError
-        When the pulse cannot be processed (the message names the field).
+        When the pulse cannot be processed (the message names the field), or
+        `models` holds no field model.
     """
+    if models.field is None:
+        raise ValueError("the engine models hold no field model: triage needs one")
+    field_model = models.field
     if notification.vehicle_model not in models.vehicle_models:
         raise UnknownVehicleModel(
             f"unknown vehicle model {notification.vehicle_model!r}; known: "
@@ -643,46 +972,26 @@ def triage(notification: CrashNotification, models: EngineModels) -> TriageResul
     assumptions: list[str] = []
     if notification.rollover:
         assumptions.append(
-            "rollover reported: not modelled by the engine; weigh it in field triage"
+            "rollover reported: the field model's probability is that of a rollover (it is "
+            "in its data); the occupant models see only the planar crash pulse"
         )
     if notification.multiple_impacts:
         assumptions.append(
-            "multiple impacts reported: the engine models the recorded pulse as one event"
+            "multiple impacts reported: the field model's probability includes them (they "
+            "are in its data); the occupant models run the recorded pulse as one event"
         )
 
     occupants: list[OccupantTriage] = []
-    used_lpm = False
+    field_ms = 0.0
     for i, occupant in enumerate(notification.occupants):
-        impact = classify_impact(pulse.pdof_deg, occupant.seat, notification.drive_side)
-        baseline = _baseline_decision(models, occupant, pulse, impact)
-        answer: OccupantTriage | None = None
-        if impact.in_lpm_coverage:
-            params = models.parameter_sets[notification.vehicle_model]
-            answer = _lpm_occupant(
-                i, occupant, impact, pulse, params, models, baseline, assumptions
-            )
-            used_lpm = used_lpm or answer is not None
-        elif not occupant.seat.front_row:
-            assumptions.append(
-                f"occupants[{i}]: {occupant.seat.value} seat: the occupant models are of the "
-                "front row; statistical baseline used (fitted on front-seat occupants)"
-            )
-        else:
-            assumptions.append(
-                f"occupants[{i}]: PDOF {impact.pdof_deg:.0f} deg is outside every occupant "
-                "model's coverage; statistical baseline used"
-            )
-        occupants.append(
-            answer
-            or OccupantTriage(
-                seat=occupant.seat,
-                body=occupant.body,
-                impact=impact,
-                method="baseline",
-                triage=baseline,
-                baseline=baseline,
-            )
-        )
+        evidence = _occupant_evidence(i, occupant, notification, pulse, models, assumptions)
+        tf = time.perf_counter()
+        prediction = field_model.predict(evidence.field_inputs)
+        decision = _field_decision(field_model, models, prediction)
+        field_ms += 1000.0 * (time.perf_counter() - tf)
+        assumptions.extend(_field_assumptions(i, occupant, prediction, field_model))
+        occupants.append(_occupant_triage(occupant, evidence, decision, prediction.mode))
+    used_lpm = any(o.method is Method.LPM for o in occupants)
     t2 = time.perf_counter()
 
     return TriageResult(
@@ -696,6 +1005,7 @@ def triage(notification: CrashNotification, models: EngineModels) -> TriageResul
         timings_ms={
             "pulse": 1000.0 * (t1 - t0),
             "occupants": 1000.0 * (t2 - t1),
+            "field_model": field_ms,
             "engine_total": 1000.0 * (t2 - t0),
         },
     )

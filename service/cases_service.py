@@ -18,7 +18,7 @@ from typing import Any
 
 from sqlalchemy.exc import IntegrityError
 
-from models.triage import EngineModels, UnknownVehicleModel, triage
+from models.triage import EngineModels, Method, UnknownVehicleModel, triage
 from service.auth import Caller
 from service.context import ServiceContext
 from service.conversion import to_case_result
@@ -190,7 +190,8 @@ def submit(
         return _replay_or_conflict(existing, request_sha256, ctx)
     decision = "iss15_plus" if result.triage.iss15_plus else "not_iss15_plus"
     methods = {o.method for o in result.occupants}
-    ctx.metrics.decisions.labels(decision, "lpm" if "lpm" in methods else "baseline").inc()
+    method = Method.LPM if Method.LPM in methods else Method.FIELD
+    ctx.metrics.decisions.labels(decision, method.value).inc()
     return SubmitOutcome(result=result, replayed=False)
 
 

@@ -12,6 +12,8 @@ Commands::
     aacn-triage build-surrogates [--family NAME] [--workers N] ...
     aacn-triage validate-surrogates [--n N] [--seed S] [--family NAME] ...
     aacn-triage baseline fit [--data CSV] [--out JSON]
+    aacn-triage fit-field [--out DIR] [--artifact JSON] [--cache DIR]
+    aacn-triage evaluate FILE [--labels LABELS] [--out DIR] [--operating-point NAME]
 """
 
 from __future__ import annotations
@@ -211,6 +213,106 @@ def _run_batch(src: Path, out: Path, models: Any, *, resume: bool) -> int:
     return 0
 
 
+def _labelled_jsonl(
+    path: Path, labels: Path | None, label_field: str, weight_field: str | None
+) -> tuple[list[tuple[Any, bool, float]], int]:
+    """Notifications of a JSON Lines file with their outcomes (engine form).
+
+    The outcome (0/1) is the `label_field` of each line (removed before the
+    notification is validated) or, with `labels`, the row of a CSV or JSON Lines
+    file with the same ``event_id``. Returns the labelled notifications and the
+    number of lines refused (invalid, or without a label).
+    """
+    import csv
+
+    from service.schemas import CrashNotificationIn
+
+    table: dict[str, dict[str, Any]] = {}
+    if labels is not None:
+        if labels.suffix.lower() == ".csv":
+            with labels.open(newline="", encoding="utf-8") as fh:
+                table = {r["event_id"]: dict(r) for r in csv.DictReader(fh)}
+        else:
+            for raw in labels.read_text(encoding="utf-8").splitlines():
+                if raw.strip():
+                    rec = json.loads(raw)
+                    table[str(rec["event_id"])] = rec
+    out: list[tuple[Any, bool, float]] = []
+    refused = 0
+    for raw in path.read_text(encoding="utf-8").splitlines():
+        if not raw.strip():
+            continue
+        doc = json.loads(raw)
+        label_doc = table.get(str(doc.get("event_id"))) if labels is not None else doc
+        outcome = None if label_doc is None else label_doc.get(label_field)
+        weight = 1.0
+        if weight_field and label_doc is not None and label_doc.get(weight_field) is not None:
+            weight = float(label_doc[weight_field])
+        for key in (label_field, weight_field):
+            if key:
+                doc.pop(key, None)
+        try:
+            notification = CrashNotificationIn.model_validate(doc)
+        except ValidationError:
+            refused += 1
+            continue
+        if outcome is None or str(outcome) not in ("0", "1", "True", "False", "true", "false"):
+            refused += 1
+            continue
+        engine_input, _ = notification.to_engine()
+        out.append((engine_input, str(outcome) in ("1", "True", "true"), weight))
+    return out, refused
+
+
+def _cmd_evaluate(args: argparse.Namespace) -> int:
+    """Score labelled notifications: AUC, calibration, triage rates; Markdown + PNG."""
+    from models.field_check import field_cases
+    from models.offline.field.evaluate import evaluate_notifications, write_evaluation
+    from models.offline.field.rows import (
+        load_calibration_rows,
+        police_notification,
+        row_notification,
+    )
+
+    _settings()
+    src = Path(args.file)
+    weighted = False
+    if src.suffix.lower() == ".csv":
+        with src.open(encoding="utf-8") as fh:
+            header = fh.readline()
+        if "mais3pl" in header:
+            labelled = [(row_notification(r), r.mais3, 1.0) for r in load_calibration_rows(src)]
+        elif "injSeverity" in header:
+            labelled = [
+                (police_notification(c, i), c.serious, c.weight)
+                for i, c in enumerate(field_cases(src))
+            ]
+            weighted = True
+        else:
+            _print(
+                "error: a CSV must be the NASS-CDS MAIS calibration format (mais3pl) or the "
+                "NASS-CDS 1997-2000 format (injSeverity); other data: JSON Lines",
+                err=True,
+            )
+            return 2
+        refused = 0
+    else:
+        labels = Path(args.labels) if args.labels else None
+        labelled, refused = _labelled_jsonl(src, labels, args.label_field, args.weight_field)
+        weighted = args.weight_field is not None
+    if not labelled:
+        _print("error: no labelled notification to score", err=True)
+        return 1
+    cases = evaluate_notifications(
+        labelled, operating_point=args.operating_point, workers=args.workers
+    )
+    out = write_evaluation(
+        cases, Path(args.out), title=f"Evaluation of {src.name}", weighted=weighted
+    )
+    _print(f"{len(cases)} scored, {refused} refused; report in {out}", err=True)
+    return 0
+
+
 def _cmd_simulate(args: argparse.Namespace) -> int:
     """Run the occupant models of one notification; print the measures, draw the plot."""
     import dataclasses
@@ -289,6 +391,10 @@ _HANDED_OVER: dict[str, tuple[str, str]] = {
         "models.surrogate.validate",
         "score the surrogates on fresh direct LPM runs (resumable)",
     ),
+    "fit-field": (
+        "models.offline.field.fit",
+        "fit the field risk model on real crashes, cross-validate, write the model card",
+    ),
 }
 
 
@@ -354,6 +460,25 @@ def build_parser() -> argparse.ArgumentParser:
     sim.add_argument("file", help="one notification (JSON)")
     sim.add_argument("--plot", help="draw pulse, motion and measures to this image (PNG)")
     sim.set_defaults(func=_cmd_simulate)
+
+    ev = sub.add_parser(
+        "evaluate",
+        help="score the decision against real outcomes (AUC, calibration, triage rates)",
+    )
+    ev.add_argument(
+        "file",
+        help="JSON Lines of notifications, or a NASS-CDS CSV (MAIS calibration or 1997-2000 "
+        "format, labelled by its own outcome column)",
+    )
+    ev.add_argument("--labels", help="CSV or JSON Lines with event_id and the outcome column")
+    ev.add_argument(
+        "--label-field", default="outcome", help="outcome column or field, 0/1 (default outcome)"
+    )
+    ev.add_argument("--weight-field", help="case weight column or field (survey weights)")
+    ev.add_argument("--out", default="evaluation", help="report directory (default ./evaluation)")
+    ev.add_argument("--operating-point", help="field model operating point (default: its own)")
+    ev.add_argument("--workers", type=int, help="processes (default: the CPU count)")
+    ev.set_defaults(func=_cmd_evaluate)
 
     for command, (_, text) in _HANDED_OVER.items():
         handed = sub.add_parser(command, help=text, add_help=False)

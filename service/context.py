@@ -18,6 +18,8 @@ def engine_models_for(settings: Settings) -> EngineModels:
     """Load the engine models as the settings configure them (raises ValueError)."""
     return load_engine_models(
         threshold_override=settings.triage_threshold,
+        operating_point=settings.operating_point,
+        field_artifact=settings.field_artifact,
         posture_sd_deg=settings.posture_sd_deg,
         seat_track_sd_mm=settings.seat_track_sd_mm,
         surrogate_dir=settings.surrogate_dir,

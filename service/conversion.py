@@ -27,6 +27,9 @@ def _triage_out(d: TriageDecision) -> TriageOut:
         probability_ci95=d.probability_ci95,
         threshold=d.threshold,
         recommendation=d.recommendation,
+        outcome=d.outcome,
+        model=d.model,
+        operating_point=d.operating_point,
     )
 
 
@@ -34,7 +37,8 @@ def _occupant_out(o: OccupantTriage) -> OccupantOut:
     return OccupantOut(
         seat=o.seat,
         body=o.body,
-        impact_mode=o.impact.mode.value,
+        impact_mode=o.impact.mode,
+        field_mode=o.field_mode,
         impact_angle_deg=o.impact.angle_from_axis_deg,
         in_lpm_coverage=o.impact.in_lpm_coverage,
         method=o.method,
@@ -52,6 +56,7 @@ def _occupant_out(o: OccupantTriage) -> OccupantOut:
             else None
         ),
         triage=_triage_out(o.triage),
+        occupant_model=_triage_out(o.occupant_model) if o.occupant_model is not None else None,
         baseline=_triage_out(o.baseline),
     )
 

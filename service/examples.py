@@ -6,28 +6,32 @@ from typing import Any
 
 __all__ = ["EXAMPLE_CASE_LIST", "EXAMPLE_CASE_RESULT", "EXAMPLE_STORED_CASE"]
 
-#: `POST /v1/cases` answer for the "summary" example notification (engine 0.1.0).
+#: `POST /v1/cases` answer for the "summary" example notification (the engine as shipped).
 EXAMPLE_CASE_RESULT: dict[str, Any] = {
     "case_id": "0b9e3c55-6a4f-4f3e-9a51-2f1f5d0c7e21",
     "event_id": "tsp-7d1c2a90-0001",
     "received_at": "2026-11-23T08:15:31Z",
     "triage": {
-        "iss15_plus": False,
-        "probability": 0.03724,
-        "probability_ci95": [0.008391, 0.0681],
-        "threshold": 0.1,
-        "recommendation": "No telemetry indication of ISS 15 or more: destination by EMS "
-        "field assessment under local protocol.",
+        "iss15_plus": True,
+        "probability": 0.6238,
+        "probability_ci95": [0.307, 0.8612],
+        "threshold": 0.0382,
+        "recommendation": "Transport to a Level I trauma center: vehicle telemetry "
+        "consistent with severe injury (ISS 15 or more likely).",
+        "outcome": "MAIS3+",
+        "model": "field_mais3@1.0.0",
+        "operating_point": "sens80",
     },
     "occupants": [
         {
             "seat": "driver",
             "body": "male_50th",
             "impact_mode": "frontal",
+            "field_mode": "frontal",
             "impact_angle_deg": 0.0,
             "in_lpm_coverage": True,
             "method": "lpm",
-            "iss": {"estimate": 0, "ci95": [0.0, 2.442]},
+            "iss": {"estimate": 0, "ci95": [0.0, 1.455]},
             "region_ais": {
                 "head_neck": 0,
                 "face": 0,
@@ -37,22 +41,22 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
                 "external": 0,
             },
             "measures": {
-                "hic15": 134.9,
-                "nij": 0.3338,
-                "chest_deflection_mm": 26.35,
+                "hic15": 135.5,
+                "nij": 0.3377,
+                "chest_deflection_mm": 26.34,
                 "chest_vc_m_s": 0.08505,
-                "chest_a3ms_g": 41.14,
+                "chest_a3ms_g": 41.12,
             },
             "measures_ci95": {
-                "hic15": [127.6, 202.4],
-                "nij": [0.3117, 0.4641],
-                "chest_deflection_mm": [25.61, 27.23],
-                "chest_vc_m_s": [0.0737, 0.09901],
-                "chest_a3ms_g": [38.97, 42.06],
+                "hic15": [120.3, 182.9],
+                "nij": [0.289, 0.4232],
+                "chest_deflection_mm": [25.47, 27.28],
+                "chest_vc_m_s": [0.07251, 0.09693],
+                "chest_a3ms_g": [38.48, 42.61],
             },
             "interval_method": "pce_bootstrap",
             "point_outside_interval": False,
-            "probability_uncorrected": 0.08184,
+            "probability_uncorrected": 0.08235,
             "probability_zero_load": 0.04633,
             "sensor_inputs": {
                 "posture_deg": 5.8,
@@ -61,20 +65,40 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
                 "seat_track_sd_mm": 25.51,
             },
             "triage": {
+                "iss15_plus": True,
+                "probability": 0.6238,
+                "probability_ci95": [0.307, 0.8612],
+                "threshold": 0.0382,
+                "recommendation": "Transport to a Level I trauma center: vehicle "
+                "telemetry consistent with severe injury (ISS 15 "
+                "or more likely).",
+                "outcome": "MAIS3+",
+                "model": "field_mais3@1.0.0",
+                "operating_point": "sens80",
+            },
+            "occupant_model": {
                 "iss15_plus": False,
-                "probability": 0.03724,
-                "probability_ci95": [0.008391, 0.0681],
+                "probability": 0.03777,
+                "probability_ci95": [0.03513, 0.04372],
                 "threshold": 0.1,
-                "recommendation": "No telemetry indication of ISS 15 or more: destination by EMS "
-                "field assessment under local protocol.",
+                "recommendation": "No telemetry indication of ISS 15 or "
+                "more: destination by EMS field "
+                "assessment under local protocol.",
+                "outcome": "ISS15+",
+                "model": "occupant_models",
+                "operating_point": None,
             },
             "baseline": {
                 "iss15_plus": True,
                 "probability": 0.4722,
                 "probability_ci95": [0.2666, 0.6876],
                 "threshold": 0.042,
-                "recommendation": "Transport to a Level I trauma center: vehicle telemetry "
-                "consistent with severe injury (ISS 15 or more likely).",
+                "recommendation": "Transport to a Level I trauma center: vehicle "
+                "telemetry consistent with severe injury (ISS "
+                "15 or more likely).",
+                "outcome": "police_A+K",
+                "model": "nass_logistic",
+                "operating_point": None,
             },
         }
     ],
@@ -87,12 +111,19 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         "duration_ms": 100.0,
         "haversine": {"amplitude_g": 31.72, "duration_ms": 100.0, "r_squared": 1.0},
     },
-    "assumptions": [],
+    "assumptions": [
+        "occupants[0]: stature or mass unknown: the field model uses the calibration "
+        "median body mass index, 25.1 kg/m2"
+    ],
     "engine_version": "0.2.0",
     "models": {
         "baseline": {
             "version": "1.0.0",
             "sha256": "b670eb94214f8538cb2bf5a286f617204aec2c091e667622dc418cd6b1ac7710",
+        },
+        "field_model": {
+            "version": "1.0.0",
+            "sha256": "1eb6a131bd03a306ee940a6f136195192f8f69a8d3e4694ec63ac717144bd712",
         },
         "lpm_parameters:compact_sedan": {
             "version": "compact_sedan",
@@ -101,6 +132,10 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         "lpm_code": {
             "version": "0.2.0",
             "sha256": "8991761c3b3aa940fbc4326062ff6d44973b0aaf690e7496ae063ca8cdd79127",
+        },
+        "triage_code": {
+            "version": "0.2.0",
+            "sha256": "3c5a5cb21015b2e70180611eabe4b373fa619e8241c0b35de48cc6563e72afb2",
         },
         "risk_calibration": {
             "version": "1",
@@ -114,12 +149,8 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
             "version": "7",
             "sha256": "d0fbb019a6456227d2c615db656586e5d1c067d9f6622e1d99ea9207a6b36021",
         },
-        "triage_code": {
-            "version": "0.2.0",
-            "sha256": "9390842e7fd46602e0c715241f4af9a363325e4c8e1c4f1072b8a718aa593960",
-        },
     },
-    "timings_ms": {"pulse": 0.9, "occupants": 12.4, "engine_total": 13.3},
+    "timings_ms": {"pulse": 0.07, "occupants": 12.61, "field_model": 0.08, "engine_total": 12.68},
 }
 
 #: `GET /v1/cases/{case_id}`.

@@ -21,6 +21,9 @@ from pydantic import (
 )
 
 from models import notification as engine
+from models.field.features import FieldMode
+from models.impact_mode import ImpactMode
+from models.triage import IntervalMethod, Method
 from service.examples import EXAMPLE_CASE_LIST, EXAMPLE_CASE_RESULT, EXAMPLE_STORED_CASE
 
 __all__ = [
@@ -54,12 +57,8 @@ MIN_SERIES_MS, MAX_SERIES_MS = 20.0, 3000.0
 #: EDR delta-V records: 49 CFR 563 Table I records 0-250 ms at 100 Hz (10 ms).
 MIN_EDR_INTERVAL_MS, MAX_EDR_INTERVAL_MS = 1.0, 50.0
 #: Hybrid III anthropometry used to map stature and mass to the nearer dummy
-#: (occupant-lpm-notes.md section 2): 50th male 175 cm / 77.7 kg;
-#: 5th female 151 cm / 49.1 kg [S].
-DUMMY_STATURE_MASS = {
-    engine.Body.MALE_50TH: (175.0, 77.7),
-    engine.Body.FEMALE_5TH: (151.0, 49.1),
-}
+#: (defined once in the engine).
+DUMMY_STATURE_MASS = engine.DUMMY_STATURE_MASS
 
 
 class WireModel(BaseModel):
@@ -301,19 +300,9 @@ class OccupantIn(WireModel):
         """The dummy class to use and, when it was not given, how it was chosen."""
         if self.body is not None:
             return self.body, None
-        if self.stature_cm is None and self.mass_kg is None:
+        body = engine.nearest_body(self.stature_cm, self.mass_kg)
+        if body is None:
             return engine.Body.MALE_50TH, "body unknown: Hybrid III 50th male assumed"
-
-        def distance(b: engine.Body) -> float:
-            stature, mass = DUMMY_STATURE_MASS[b]
-            d = 0.0
-            if self.stature_cm is not None:
-                d += ((self.stature_cm - stature) / stature) ** 2
-            if self.mass_kg is not None:
-                d += ((self.mass_kg - mass) / mass) ** 2
-            return d
-
-        body = min(DUMMY_STATURE_MASS, key=distance)
         return body, f"body mapped from stature/mass to the nearer dummy: {body.value}"
 
     def _seat_track_source(self) -> engine.SeatTrackSource:
@@ -348,6 +337,8 @@ class OccupantIn(WireModel):
                 seat_track_sd_mm=self.seat_track_sd_mm,
                 posture_sensed=self.posture_lumbar_flexion_deg is not None,
                 seat_track_source=self._seat_track_source(),
+                stature_cm=self.stature_cm,
+                mass_kg=self.mass_kg,
             ),
             note,
         )
@@ -537,20 +528,39 @@ class OutModel(BaseModel):
 
 
 class TriageOut(OutModel):
-    """An ISS15+ triage decision."""
+    """A trauma-center decision on a probability of serious injury."""
 
-    iss15_plus: bool = Field(description="True: likely ISS >= 15, transport to a Level I center.")
+    iss15_plus: bool = Field(
+        description="True: likely ISS >= 15, transport to a Level I trauma center "
+        "(`probability` >= `threshold`)."
+    )
     probability: float = Field(
         ge=0,
         le=1,
-        description="Estimated P(ISS >= 15) or its proxy. Occupant models: the risk attributable "
-        "to the crash loads (zero-load correction, see the occupant's `probability_uncorrected`).",
+        description="Probability of `outcome`. The decision (`triage` of a case or occupant) is "
+        "the field risk model's P(MAIS 3+), calibrated on real NASS-CDS crashes; MAIS 3+ is the "
+        "stand-in for ISS 15+ (broader: one AIS 3 injury alone is ISS 9). Second opinions: the "
+        "occupant models' P(ISS >= 15) attributable to the crash loads (`occupant_model`), and "
+        "the statistical baseline's police-reported A+K risk (`baseline`).",
     )
     probability_ci95: tuple[float, float] = Field(
-        description="95% interval of `probability` [low, high]."
+        description="95% interval of `probability` [low, high]; it holds `probability`."
     )
     threshold: float = Field(description="Decision threshold on `probability`.")
     recommendation: str = Field(description="What to do with the patient, in words.")
+    outcome: str = Field(
+        description="What `probability` is a probability of: `MAIS3+` (field model), "
+        "`ISS15+` (occupant models), `police_A+K` (statistical baseline).",
+        examples=["MAIS3+"],
+    )
+    model: str = Field(description="The model that gave it.", examples=["field_mais3@1.0.0"])
+    operating_point: str | None = Field(
+        default=None,
+        description="Named operating point of the field model whose threshold decided "
+        "(`sens80`: sensitivity >= 0.80 for MAIS 3+ at the smallest flagged share; "
+        "`sens80_per_mode`; `bahouth`: 0.10 frontal/rear, 0.05 side/rollover); null when "
+        "`AACN_TRIAGE_THRESHOLD` overrides it or for second opinions.",
+    )
 
 
 class IssOut(OutModel):
@@ -601,10 +611,22 @@ class OccupantOut(OutModel):
 
     seat: engine.Seat
     body: engine.Body = Field(description="Dummy class the engine used.")
-    impact_mode: str = Field(description="frontal, rear, near_side or far_side (nearest).")
+    impact_mode: ImpactMode = Field(
+        description="The occupant's impact mode: the nearest of the four occupant models' axes "
+        "to the PDOF, for this seat."
+    )
+    field_mode: FieldMode = Field(
+        description="The crash mode the field model used: `rollover` when reported, else "
+        "`impact_mode`."
+    )
     impact_angle_deg: float = Field(description="PDOF relative to the mode's axis, deg.")
     in_lpm_coverage: bool = Field(description="The PDOF lies inside an occupant model's range.")
-    method: str = Field(description="Engine that answered: `lpm` or `baseline`.")
+    method: Method = Field(
+        description="How the occupant was answered. The decision is always the field model's; "
+        "`lpm`: an occupant model ran and explains it (measures, region AIS, ISS, its own "
+        "decision in `occupant_model`); `field`: no occupant model applies (PDOF between the "
+        "models' ranges, a second-row seat) or it failed."
+    )
     iss: IssOut | None = Field(default=None, description="ISS where the engine provides it.")
     region_ais: dict[str, int] | None = Field(
         default=None, description="AIS per ISS body region, where the engine provides it."
@@ -620,11 +642,13 @@ class OccupantOut(OutModel):
         description="95% interval of each measure under sensor uncertainty; for "
         "`pce_bootstrap`, it includes the surrogate's own error (held-out calibrated margin).",
     )
-    interval_method: str = Field(
-        description="Where the 95% intervals come from: `pce_bootstrap` (surrogates, "
-        "bootstrap replicates, widened by margins calibrated on held-out occupant-model "
-        "runs), `lpm_sensor_box` (direct runs over the +/-1.96 SD sensor "
-        "box), or `coefficient_covariance` (the baseline's coefficients)."
+    interval_method: IntervalMethod | None = Field(
+        default=None,
+        description="Where the occupant model's 95% intervals come from: `pce_bootstrap` "
+        "(surrogates, bootstrap replicates, widened by margins calibrated on held-out "
+        "occupant-model runs) or `lpm_sensor_box` (direct runs over the +/-1.96 SD sensor "
+        "box); null without an occupant model. The decided probability's interval is the field "
+        "model's (bootstrap refits).",
     )
     point_outside_interval: bool = Field(
         default=False,
@@ -635,7 +659,8 @@ class OccupantOut(OutModel):
         ge=0,
         le=1,
         description="Occupant models only: P(ISS >= 15) from the published risk curves before "
-        "the zero-load correction. `triage.probability` = (this - probability_zero_load) / "
+        "the zero-load correction (the mean over the spread when posture or seat position was "
+        "not sensed). `occupant_model.probability` = (this - probability_zero_load) / "
         "(1 - probability_zero_load), clipped to [0, 1] (Abbott's formula).",
     )
     probability_zero_load: float | None = Field(
@@ -651,7 +676,15 @@ class OccupantOut(OutModel):
         "at, with the SDs its intervals propagate (a reading and its sensor SD, or the range "
         "the evidence allows; see `assumptions`).",
     )
-    triage: TriageOut
+    triage: TriageOut = Field(
+        description="The decision: the field model's P(MAIS 3+) at its operating point."
+    )
+    occupant_model: TriageOut | None = Field(
+        default=None,
+        description="The occupant models' own decision on their P(ISS >= 15) attributable to "
+        "the crash loads, at Bahouth's 0.10 frontal/rear, 0.05 side (second opinion, the "
+        "physics explanation); null without an occupant model.",
+    )
     baseline: TriageOut = Field(
         description="The statistical baseline's answer (second opinion; outcome is "
         "police-reported serious injury, a proxy for ISS15+)."

@@ -8,6 +8,8 @@ from pathlib import Path
 from pydantic import Field
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
+from models.constants import DEFAULT_POSTURE_SD_DEG, DEFAULT_SEAT_TRACK_SD_MM
+
 __all__ = ["Settings", "get_settings"]
 
 
@@ -38,16 +40,28 @@ class Settings(BaseSettings):
         default=None,
         gt=0.0,
         lt=1.0,
-        description="Override of the ISS15+ decision threshold on P(ISS>=15); None uses "
-        "each model's documented threshold.",
+        description="Override of the decision threshold on the field model's P(MAIS 3+), for "
+        "every crash mode; None uses the operating point's thresholds.",
+    )
+    operating_point: str | None = Field(
+        default=None,
+        description="Named operating point of the field model: `sens80` (the default: "
+        "sensitivity >= 0.80 for MAIS 3+ at the smallest flagged share), `sens80_per_mode`, "
+        "`bahouth` (0.10 frontal/rear, 0.05 side/rollover). An unknown name leaves the "
+        "service not ready.",
+    )
+    field_artifact: Path | None = Field(
+        default=None,
+        description="Field model artifact (JSON); None: the shipped one. An altered or stale "
+        "artifact leaves the service not ready.",
     )
     posture_sd_deg: float = Field(
-        default=5.0 / 1.959964,
+        default=DEFAULT_POSTURE_SD_DEG,
         gt=0.0,
         description="Default posture sensor SD, deg: within 5 deg 95% of the time (issue 5).",
     )
     seat_track_sd_mm: float = Field(
-        default=50.0 / 1.959964,
+        default=DEFAULT_SEAT_TRACK_SD_MM,
         gt=0.0,
         description="Default seat position sensor SD, mm: within 5 cm 95% of the time (issue 5).",
     )

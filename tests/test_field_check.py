@@ -88,7 +88,8 @@ def test_the_probabilities_are_the_services_own(models: EngineModels) -> None:
         notification = summary_notification((occupant,), case.delta_v_kmh, 0.0)
         occ = triage(notification, models).occupants[0]
         assert occ.method == "lpm"
-        assert occ.triage.probability == p
+        assert occ.occupant_model is not None
+        assert occ.occupant_model.probability == p
 
 
 def _effect(check: FieldCheck, population: str, contrast: str) -> RestraintEffect:

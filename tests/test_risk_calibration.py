@@ -95,11 +95,14 @@ def _notification(delta_v: float, pdof: float, age: float | None = 40.0) -> Cras
 
 
 @pytest.mark.parametrize(("delta_v", "pdof"), [(56.0, 0.0), (30.0, 270.0), (45.0, 180.0)])
-def test_the_service_decides_on_the_corrected_probability(
+def test_the_occupant_models_decide_on_the_corrected_probability(
     models: EngineModels, delta_v: float, pdof: float
 ) -> None:
+    """The occupant models' own decision (the second opinion beside the field model's)."""
     occ = triage(_notification(delta_v, pdof), models).occupants[0]
     assert occ.method == "lpm"
+    model = occ.occupant_model
+    assert model is not None
     assert occ.probability_uncorrected is not None
     assert occ.probability_zero_load is not None
     assert occ.measures is not None
@@ -107,21 +110,48 @@ def test_the_service_decides_on_the_corrected_probability(
     assert occ.probability_zero_load == zero_load_probability(
         measures, occ.body, 40.0, occ.impact.mode
     )
-    assert occ.triage.probability == corrected_probability(
+    assert model.probability == corrected_probability(
         occ.probability_uncorrected, occ.probability_zero_load
     )
-    assert occ.triage.probability < occ.probability_uncorrected
-    assert occ.triage.iss15_plus == (occ.triage.probability >= occ.triage.threshold)
-    lo, hi = occ.triage.probability_ci95
+    assert model.probability < occ.probability_uncorrected
+    assert model.iss15_plus == (model.probability >= model.threshold)
+    lo, hi = model.probability_ci95
     assert 0.0 <= lo <= hi <= 1.0
 
 
+def test_the_interval_is_corrected_at_the_occupants_age(models: EngineModels) -> None:
+    """The surrogate runs at the occupant's age, so its interval loses that age's floor.
+
+    Issue 21 (a): the interval's zero-load correction used the default age. At a
+    high age the chest curve's floor differs from the default's; the corrected
+    interval must be the surrogate's interval corrected with the occupant's own P0.
+    """
+    for age in (25.0, 85.0):
+        occ = triage(_notification(35.0, 0.0, age=age), models).occupants[0]
+        assert occ.occupant_model is not None
+        assert occ.probability_zero_load is not None
+        p0 = occ.probability_zero_load
+        assert occ.measures is not None
+        assert p0 == zero_load_probability(
+            InjuryMeasures(**occ.measures), occ.body, age, occ.impact.mode
+        )
+        lo, hi = occ.occupant_model.probability_ci95
+        # undo the correction: the uncorrected bounds are the surrogate's, which hold
+        # the uncorrected point (an unflagged answer)
+        raw_lo, raw_hi = lo * (1 - p0) + p0, hi * (1 - p0) + p0
+        assert occ.point_outside_interval or (
+            raw_lo - 1e-12 <= occ.probability_uncorrected <= raw_hi + 1e-12
+        )
+        assert lo <= occ.occupant_model.probability <= hi or occ.point_outside_interval
+
+
 def test_the_baseline_is_not_corrected(models: EngineModels) -> None:
-    """Out of coverage (PDOF 45 deg) the field-fitted baseline answers as it is."""
+    """Out of coverage (PDOF 45 deg) the baseline's second opinion is its own as it is."""
     occ = triage(_notification(40.0, 45.0), models).occupants[0]
-    assert occ.method == "baseline"
+    assert occ.method == "field"
     assert occ.probability_uncorrected is None
-    assert occ.triage == occ.baseline
+    assert occ.occupant_model is None
+    assert occ.baseline.outcome == "police_A+K"
 
 
 def test_the_correction_is_recorded_with_every_lpm_case(models: EngineModels) -> None:

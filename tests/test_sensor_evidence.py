@@ -107,12 +107,14 @@ def _width(ci: tuple[float, float] | None) -> float:
     return ci[1] - ci[0]
 
 
-def test_without_readings_the_answer_is_the_same_and_its_intervals_are_wider(
+def test_without_readings_the_answer_is_the_spread_mean_and_its_intervals_are_wider(
     models: EngineModels,
 ) -> None:
-    """The decision stays on the direct run at the nominal posture and mid track;
-    the intervals take the whole range of posture and seat position, and the
-    answer says so."""
+    """The field decision does not depend on posture or seat; the occupant model's
+    measures stay on the direct run at the nominal posture and mid track, its
+    P(ISS >= 15) becomes the mean over the spread its interval propagates, the
+    intervals take the whole range of posture and seat position, and the answer
+    says so."""
     sensed = triage(summary_notification((DRIVER,), 56.0, 0.0), models)
     blind_occ = dataclasses.replace(
         DRIVER, posture_sensed=False, seat_track_source=SeatTrackSource.NOT_SENSED
@@ -121,9 +123,14 @@ def test_without_readings_the_answer_is_the_same_and_its_intervals_are_wider(
     a, b = sensed.occupants[0], blind.occupants[0]
     assert a.method == b.method == "lpm"
     assert a.interval_method == b.interval_method == "pce_bootstrap"
-    assert b.triage.probability == a.triage.probability
+    assert b.triage == a.triage, "the field model does not see posture or seat"
     assert b.measures == a.measures
-    assert _width(b.triage.probability_ci95) > _width(a.triage.probability_ci95)
+    assert a.occupant_model is not None
+    assert b.occupant_model is not None
+    lo, hi = b.occupant_model.probability_ci95
+    assert lo <= b.occupant_model.probability <= hi
+    assert _width(b.occupant_model.probability_ci95) > _width(a.occupant_model.probability_ci95)
+    assert any("mean over the unsensed" in x for x in blind.assumptions)
     assert b.iss is not None
     assert a.iss is not None
     assert _width(b.iss.ci95) > _width(a.iss.ci95)

@@ -6,6 +6,7 @@ import dataclasses
 
 import pytest
 
+from models.field.features import FieldMode
 from models.impact_mode import ImpactMode
 from models.notification import (
     AirbagState,
@@ -19,6 +20,8 @@ from models.notification import (
 from models.triage import (
     LPM_THRESHOLDS,
     EngineModels,
+    IntervalMethod,
+    Method,
     UnknownVehicleModel,
     load_engine_models,
     simulate_notification,
@@ -62,7 +65,7 @@ def test_in_coverage_occupants_are_answered_by_their_occupant_model(
 ) -> None:
     result = triage(_notification(56.0, 0.0), models)
     occ = result.occupants[0]
-    assert occ.method == "lpm"
+    assert occ.method is Method.LPM
     assert occ.impact.mode is ImpactMode.FRONTAL
     assert occ.iss is not None
     assert occ.region_ais is not None
@@ -78,7 +81,15 @@ def test_in_coverage_occupants_are_answered_by_their_occupant_model(
     assert {"hic15", "nij", "chest_deflection_mm"} <= set(occ.measures)
     lo, hi = occ.triage.probability_ci95
     assert lo <= occ.triage.probability <= hi
-    assert occ.triage.threshold == LPM_THRESHOLDS[ImpactMode.FRONTAL]
+    assert models.field is not None
+    assert occ.triage.threshold == models.field.threshold(FieldMode.FRONTAL)
+    assert occ.triage.outcome == "MAIS3+"
+    assert occ.triage.operating_point == models.field.default_operating_point
+    assert occ.occupant_model is not None, "the occupant model's own decision is kept"
+    assert occ.occupant_model.threshold == LPM_THRESHOLDS[ImpactMode.FRONTAL]
+    assert occ.occupant_model.outcome == "ISS15+"
+    m_lo, m_hi = occ.occupant_model.probability_ci95
+    assert m_lo <= occ.occupant_model.probability <= m_hi
     assert occ.baseline.threshold == models.baseline.threshold, "baseline kept as second opinion"
     assert "lpm_code" in result.models
     assert "lpm_parameters:compact_sedan" in result.models
@@ -86,7 +97,7 @@ def test_in_coverage_occupants_are_answered_by_their_occupant_model(
 
 def test_measure_intervals_contain_the_point_estimate(models: EngineModels) -> None:
     occ = triage(_notification(45.0, 270.0), models).occupants[0]
-    assert occ.method == "lpm"
+    assert occ.method is Method.LPM
     assert occ.impact.mode is ImpactMode.NEAR_SIDE
     assert occ.measures is not None
     assert occ.measures_ci95 is not None
@@ -97,14 +108,17 @@ def test_measure_intervals_contain_the_point_estimate(models: EngineModels) -> N
     assert max(widths) > 0.0, "sensor uncertainty moves at least one measure"
 
 
-def test_out_of_coverage_occupants_get_the_baseline_and_a_note(models: EngineModels) -> None:
+def test_out_of_coverage_occupants_get_the_field_model_and_a_note(models: EngineModels) -> None:
     result = triage(_notification(40.0, 50.0), models)
     occ = result.occupants[0]
-    assert occ.method == "baseline"
+    assert occ.method is Method.FIELD
     assert not occ.impact.in_lpm_coverage
-    assert occ.triage == occ.baseline
+    assert occ.triage.outcome == "MAIS3+"
+    assert occ.occupant_model is None
+    assert occ.iss is None
+    assert occ.interval_method is None
     assert any("outside every occupant model" in a for a in result.assumptions)
-    assert set(result.models) == {"baseline", "triage_code"}
+    assert set(result.models) == {"baseline", "field_model", "triage_code"}
 
 
 def test_severity_rises_with_delta_v(models: EngineModels) -> None:
@@ -149,6 +163,19 @@ def test_out_of_domain_sensor_values_are_clamped_and_reported(models: EngineMode
     assert "rollover" in text
 
 
+def test_rollover_and_multiple_impacts_change_the_probability(models: EngineModels) -> None:
+    """They are in the field data: each raises the decided probability (not only a note)."""
+    plain = triage(_notification(30.0, 0.0), models).occupants[0]
+    rolled = triage(_notification(30.0, 0.0, rollover=True), models).occupants[0]
+    multi = triage(
+        dataclasses.replace(_notification(30.0, 0.0), multiple_impacts=True), models
+    ).occupants[0]
+    assert rolled.field_mode is FieldMode.ROLLOVER
+    assert rolled.impact.mode is ImpactMode.FRONTAL, "the occupant model still sees the pulse"
+    assert rolled.triage.probability > plain.triage.probability
+    assert multi.triage.probability > plain.triage.probability
+
+
 def test_unknown_vehicle_model(models: EngineModels) -> None:
     with pytest.raises(UnknownVehicleModel):
         triage(_notification(vehicle_model="bus"), models)
@@ -173,10 +200,11 @@ def test_intervals_come_from_the_surrogates_when_shipped(models: EngineModels) -
     assert models.surrogates is not None, "the shipped surrogates load and verify"
     result = triage(_notification(40.0, 0.0), models)
     occ = result.occupants[0]
-    assert occ.interval_method == "pce_bootstrap"
-    lo, hi = occ.triage.probability_ci95
+    assert occ.interval_method is IntervalMethod.PCE_BOOTSTRAP
+    assert occ.occupant_model is not None
+    lo, hi = occ.occupant_model.probability_ci95
     assert lo < hi, "non-degenerate"
-    assert lo <= occ.triage.probability <= hi or occ.point_outside_interval
+    assert lo <= occ.occupant_model.probability <= hi or occ.point_outside_interval
     assert occ.iss is not None
     assert occ.iss.ci95 is not None
     assert occ.iss.ci95[0] < occ.iss.ci95[1]
@@ -193,8 +221,9 @@ def test_flagged_when_the_direct_estimate_is_outside_the_surrogate_interval(
     for dv, pdof in ((40.0, 0.0), (30.0, 270.0), (45.0, 180.0), (25.0, 90.0)):
         result = triage(_notification(dv, pdof), models)
         occ = result.occupants[0]
-        lo, hi = occ.triage.probability_ci95
-        inside = lo - 2e-3 <= occ.triage.probability <= hi + 2e-3
+        assert occ.occupant_model is not None
+        lo, hi = occ.occupant_model.probability_ci95
+        inside = lo - 2e-3 <= occ.occupant_model.probability <= hi + 2e-3
         assert occ.iss is not None
         assert occ.iss.ci95 is not None
         iss_inside = occ.iss.ci95[0] - 0.5 <= occ.iss.estimate <= occ.iss.ci95[1] + 0.5
@@ -206,9 +235,10 @@ def test_flagged_when_the_direct_estimate_is_outside_the_surrogate_interval(
 def test_without_surrogates_the_interval_comes_from_direct_runs() -> None:
     bare = load_engine_models(use_surrogates=False)
     occ = triage(_notification(40.0, 0.0), bare).occupants[0]
-    assert occ.interval_method == "lpm_sensor_box"
-    lo, hi = occ.triage.probability_ci95
-    assert lo <= occ.triage.probability <= hi
+    assert occ.interval_method is IntervalMethod.LPM_SENSOR_BOX
+    assert occ.occupant_model is not None
+    lo, hi = occ.occupant_model.probability_ci95
+    assert lo <= occ.occupant_model.probability <= hi
 
 
 @pytest.mark.parametrize("pdof", [90.0, 270.0])
@@ -217,18 +247,21 @@ def test_a_minor_side_crash_is_not_sent_to_a_trauma_center(
 ) -> None:
     result = triage(_notification(8.0, pdof), models)
     occ = result.occupants[0]
-    assert occ.method == "lpm"
+    assert occ.method is Method.LPM
     assert occ.impact.mode in (ImpactMode.NEAR_SIDE, ImpactMode.FAR_SIDE)
     assert occ.iss.estimate < 15
     assert occ.triage.iss15_plus is False
+    assert occ.occupant_model is not None
+    assert occ.occupant_model.iss15_plus is False
 
 
 @pytest.mark.parametrize("seat", [Seat.REAR_LEFT, Seat.REAR_MIDDLE, Seat.REAR_RIGHT])
-def test_second_row_occupants_are_answered_by_the_baseline(
+def test_second_row_occupants_are_answered_by_the_field_model(
     models: EngineModels, seat: Seat
 ) -> None:
     """A family car: the front row keeps its occupant models, the second row gets the
-    statistical baseline with the reason, and nothing is refused."""
+    same field model without an occupant-model explanation, with the reason, and nothing
+    is refused."""
     driver = Occupant(
         seat=Seat.DRIVER, body=Body.MALE_50TH, belted=True, frontal_airbag=AirbagState.DEPLOYED
     )
@@ -237,11 +270,12 @@ def test_second_row_occupants_are_answered_by_the_baseline(
     )
     result = triage(_notification(56.0, 0.0, occupants=(driver, child)), models)
     front, rear = result.occupants
-    assert front.method == "lpm"
-    assert rear.method == "baseline"
+    assert front.method is Method.LPM
+    assert rear.method is Method.FIELD
     assert rear.impact.mode is ImpactMode.FRONTAL
     assert not rear.impact.in_lpm_coverage
-    assert rear.triage == rear.baseline
+    assert rear.triage.outcome == front.triage.outcome == "MAIS3+"
+    assert rear.occupant_model is None
     assert any(f"{seat.value} seat" in a for a in result.assumptions)
 
 
@@ -286,4 +320,4 @@ def test_every_case_records_the_code_that_turned_it_into_an_answer(models: Engin
     assert lpm.models["surrogate_evaluation"].sha256 == evaluation_sha256()
     rear_seat = dataclasses.replace(_notification().occupants[0], seat=Seat.REAR_LEFT)
     baseline_only = triage(_notification(occupants=(rear_seat,)), models)
-    assert set(baseline_only.models) == {"baseline", "triage_code"}
+    assert set(baseline_only.models) == {"baseline", "field_model", "triage_code"}

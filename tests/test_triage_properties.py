@@ -41,11 +41,16 @@ def test_every_answer_is_a_consistent_decision(
     assert 0.0 <= d.probability <= 1.0
     assert 0.0 <= lo <= hi <= 1.0
     assert d.iss15_plus == (d.probability >= d.threshold)
-    assert lo <= d.probability <= hi or occ.point_outside_interval
+    assert lo <= d.probability <= hi, "the decided probability lies inside its interval"
+    assert d.outcome == "MAIS3+"
     if occ.method == "lpm":
         assert occ.probability_uncorrected is not None
         assert occ.probability_zero_load is not None
-        assert d.probability <= occ.probability_uncorrected
+        m = occ.occupant_model
+        assert m is not None
+        assert m.probability <= occ.probability_uncorrected
+        m_lo, m_hi = m.probability_ci95
+        assert m_lo <= m.probability <= m_hi or occ.point_outside_interval
         assert occ.iss is not None
         assert 0 <= occ.iss.estimate <= 75
         assert occ.measures is not None

@@ -24,18 +24,24 @@ def test_each_documented_example_is_triaged_stored_and_read_back(
     assert len(result["occupants"]) == len(body["occupants"])
     lo, hi = result["triage"]["probability_ci95"]
     assert 0.0 <= lo < hi <= 1.0, "the interval is never degenerate"
-    worst = next(o for o in result["occupants"] if o["triage"] == result["triage"])
-    # the point estimate (direct occupant-model run on the recorded pulse) lies in
-    # the interval (surrogates of haversine pulses) or the answer says it does not
-    assert lo <= result["triage"]["probability"] <= hi or worst["point_outside_interval"]
+    assert any(o["triage"] == result["triage"] for o in result["occupants"])
+    # the decided probability (field model) always lies in its interval
+    assert lo <= result["triage"]["probability"] <= hi
+    assert result["triage"]["outcome"] == "MAIS3+"
     assert result["models"]["baseline"]["sha256"]
+    assert result["models"]["field_model"]["sha256"]
     for occ in result["occupants"]:
-        if occ["method"] == "lpm":  # decided on the risk less the curves' zero-load floor
+        if occ["method"] == "lpm":  # its own P is the risk less the curves' zero-load floor
+            model = occ["occupant_model"]
             assert 0.0 < occ["probability_zero_load"] < occ["probability_uncorrected"]
-            assert occ["triage"]["probability"] < occ["probability_uncorrected"]
+            assert model["probability"] < occ["probability_uncorrected"]
+            assert model["outcome"] == "ISS15+"
+            m_lo, m_hi = model["probability_ci95"]
+            assert m_lo <= model["probability"] <= m_hi or occ["point_outside_interval"]
             assert result["models"]["risk_calibration"]["sha256"]
         else:
             assert occ["probability_uncorrected"] is None
+            assert occ["occupant_model"] is None
 
     stored = api_any_db.client.get(
         response.headers["Location"], headers=api_any_db.headers("auditor")
@@ -164,14 +170,15 @@ def test_a_notification_with_second_row_occupants_is_triaged_not_refused(
     response = api.client.post("/v1/cases", json=body, headers=api.headers("submitter"))
     assert response.status_code == 201, response.text
     result = response.json()
-    assert [o["method"] for o in result["occupants"]] == ["lpm", "baseline", "baseline"]
+    assert [o["method"] for o in result["occupants"]] == ["lpm", "field", "field"]
     assert sum("the occupant models are of the front row" in a for a in result["assumptions"]) == 2
 
 
 def test_posture_and_seat_evidence_reach_the_answer(api: ApiClient) -> None:
     """Without posture or seat readings the answer says what it assumed; the EDR
     seat track switch narrows the seat to the forward part of the track; a reading
-    is used as given. The point answer stays the direct run at the nominal inputs."""
+    is used as given. The decision (field model) does not see posture or seat; the
+    occupant model's P is the mean over the spread where nothing was sensed."""
     answers = {}
     for label, extra in {
         "none": {},
@@ -191,9 +198,12 @@ def test_posture_and_seat_evidence_reach_the_answer(api: ApiClient) -> None:
     assert "seat position not sensed" in notes["none"]
     assert "seat track switch says foremost" in notes["switch"]
     assert "not sensed" not in notes["reading"]
-    p = {k: v["occupants"][0]["triage"]["probability"] for k, v in answers.items()}
-    assert p["none"] == p["reading"]
-    assert p["switch"] != p["reading"]  # the direct run is in the forward part of the track
+    decided = {k: v["occupants"][0]["triage"] for k, v in answers.items()}
+    assert decided["none"] == decided["switch"] == decided["reading"]
+    p = {k: v["occupants"][0]["occupant_model"]["probability"] for k, v in answers.items()}
+    assert p["switch"] != p["reading"]  # the run is in the forward part of the track
+    measures = {k: v["occupants"][0]["measures"] for k, v in answers.items()}
+    assert measures["none"] == measures["reading"]  # the direct run at the nominal inputs
     used = {k: v["occupants"][0]["sensor_inputs"] for k, v in answers.items()}
     assert used["reading"] == pytest.approx(
         {

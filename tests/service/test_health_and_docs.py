@@ -52,7 +52,7 @@ def test_metrics_count_requests_decisions_and_engine_time(api: ApiClient) -> Non
     assert 'aacn_http_requests_total{handler="/v1/cases",method="POST",status="4xx"} 1.0' in text
     assert 'aacn_triage_decisions_total{decision="iss15_plus",method="lpm"} 1.0' in text
     assert 'aacn_triage_decisions_total{decision="not_iss15_plus",method="lpm"} 1.0' in text
-    assert 'aacn_triage_decisions_total{decision="not_iss15_plus",method="baseline"} 1.0' in text
+    assert 'aacn_triage_decisions_total{decision="not_iss15_plus",method="field"} 1.0' in text
     assert "aacn_engine_seconds_count 3.0" in text
     assert "/livez" not in text
 

@@ -1,0 +1,130 @@
+"""The field-calibrated decision through the HTTP contract: stored, named, verified."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from pathlib import Path
+
+import pytest
+from fastapi.testclient import TestClient
+
+from models.field.features import FieldMode
+from models.field.model import canonical_content_sha256, default_artifact_path, load_default
+from service.app import create_app
+from service.settings import Settings
+from tests.support import ApiClient, assert_problem, summary
+
+
+def test_every_stored_case_records_the_field_model(api_any_db: ApiClient) -> None:
+    field = load_default()
+    body = summary(35.0, 0.0)
+    response = api_any_db.client.post(
+        "/v1/cases", json=body, headers=api_any_db.headers("submitter")
+    )
+    assert response.status_code == 201, response.text
+    result = response.json()
+    info = result["models"]["field_model"]
+    assert info == {"version": field.version, "sha256": field.sha256}
+    assert field.sha256 == hashlib.sha256(default_artifact_path().read_bytes()).hexdigest()
+    occ = result["occupants"][0]
+    assert occ["triage"]["model"] == f"{field.name}@{field.version}"
+    assert occ["triage"]["outcome"] == "MAIS3+"
+    assert occ["triage"]["operating_point"] == "sens80"
+    assert occ["field_mode"] == "frontal"
+    stored = api_any_db.client.get(
+        f"/v1/cases/{result['case_id']}", headers=api_any_db.headers("auditor")
+    )
+    assert stored.status_code == 200
+    assert stored.json()["models"]["field_model"] == info
+    assert stored.json()["result"] == result
+
+
+def test_the_decision_responds_to_what_the_field_data_know(api: ApiClient) -> None:
+    """Belt, rollover, multiple impacts and age move the decided probability."""
+
+    def p(**changes: object) -> float:
+        body = summary(30.0, 0.0)
+        crash = body["crash"]
+        occ = body["occupants"][0]
+        for key, value in changes.items():
+            if key in ("rollover", "multiple_impacts"):
+                crash[key] = value
+            else:
+                occ[key] = value
+        r = api.client.post("/v1/cases", json=body, headers=api.headers("submitter"))
+        assert r.status_code == 201, r.text
+        return float(r.json()["occupants"][0]["triage"]["probability"])
+
+    base = p()
+    assert p(belted=False) > base
+    assert p(rollover=True) > base
+    assert p(multiple_impacts=True) > base
+    assert p(age_years=80) > p(age_years=20)
+
+
+@pytest.mark.parametrize("operating_point", ["bahouth", "sens80_per_mode"])
+def test_the_operating_point_is_configurable(tmp_path: Path, operating_point: str) -> None:
+    settings = Settings(
+        database_url=f"sqlite:///{tmp_path / 'a.db'}", operating_point=operating_point
+    )
+    with TestClient(create_app(settings)) as client:
+        assert client.get("/readyz").status_code == 200
+        from service.auth import Role, create_api_key
+
+        _, key = create_api_key(
+            client.app.state.ctx.sessions,  # type: ignore[attr-defined]
+            name="c",
+            role=Role.SUBMITTER,
+        )
+        r = client.post(
+            "/v1/cases", json=summary(30.0, 0.0), headers={"Authorization": f"Bearer {key}"}
+        )
+        assert r.status_code == 201, r.text
+        triage = r.json()["occupants"][0]["triage"]
+        assert triage["operating_point"] == operating_point
+        expected = load_default().threshold(FieldMode.FRONTAL, operating_point)
+        assert triage["threshold"] == expected
+        if operating_point == "bahouth":
+            assert expected == 0.10
+
+
+def test_an_unknown_operating_point_leaves_the_service_not_ready(tmp_path: Path) -> None:
+    settings = Settings(database_url=f"sqlite:///{tmp_path / 'a.db'}", operating_point="nope")
+    with TestClient(create_app(settings)) as client:
+        problem = assert_problem(client.get("/readyz"), 503)
+        assert "operating point" in json.dumps(problem)
+
+
+def _copy(tmp_path: Path, edit: object) -> Path:
+    doc = json.loads(default_artifact_path().read_text(encoding="utf-8"))
+    assert callable(edit)
+    edit(doc)
+    path = tmp_path / "field.json"
+    path.write_text(json.dumps(doc), encoding="utf-8")
+    return path
+
+
+def test_readyz_is_503_on_an_altered_field_artifact(tmp_path: Path) -> None:
+    def tamper(doc: dict[str, object]) -> None:
+        doc["imputation"] = {"age_years": 80.0, "bmi": 25.0}
+
+    settings = Settings(
+        database_url=f"sqlite:///{tmp_path / 'a.db'}", field_artifact=_copy(tmp_path, tamper)
+    )
+    with TestClient(create_app(settings)) as client:
+        problem = assert_problem(client.get("/readyz"), 503)
+        assert "altered" in json.dumps(problem)
+
+
+def test_readyz_is_503_on_a_stale_field_artifact(tmp_path: Path) -> None:
+    def stale(doc: dict[str, object]) -> None:
+        doc["feature_code_sha256"] = hashlib.sha256(b"other feature code").hexdigest()
+        doc["content_sha256"] = canonical_content_sha256(doc)
+
+    settings = Settings(
+        database_url=f"sqlite:///{tmp_path / 'a.db'}", field_artifact=_copy(tmp_path, stale)
+    )
+    with TestClient(create_app(settings)) as client:
+        problem = assert_problem(client.get("/readyz"), 503)
+        assert "stale" in json.dumps(problem)
