@@ -23,6 +23,7 @@ from models.baseline.fit import (
     triage_rates,
     under_triage_threshold,
 )
+from tests.tolerance import AUC_ATOL, RERUN_RTOL, assert_tree_close
 
 
 @pytest.fixture(scope="module")
@@ -39,33 +40,26 @@ def refit(tmp_path_factory: pytest.TempPathFactory, shipped: dict[str, Any]) -> 
     )
 
 
-def _assert_close(a: Any, b: Any, path: str = "") -> None:
-    """Recursive comparison: strings and ints exact, floats to rtol 1e-8."""
-    if isinstance(a, dict):
-        assert isinstance(b, dict), path
-        assert sorted(a) == sorted(b), path
-        for k in a:
-            _assert_close(a[k], b[k], f"{path}.{k}")
-    elif isinstance(a, list):
-        assert isinstance(b, list), path
-        assert len(a) == len(b), path
-        for i, (x, y) in enumerate(zip(a, b, strict=True)):
-            _assert_close(x, y, f"{path}[{i}]")
-    elif isinstance(a, float) or isinstance(b, float):
-        assert a == pytest.approx(b, rel=1e-8, abs=1e-12), path
-    else:
-        assert a == b, path
-
-
 def test_refit_reproduces_the_shipped_artifact(refit: FitReport, shipped: dict[str, Any]) -> None:
+    """The refit on the shipped data gives the shipped artifact: strings, integers and
+    the data checksum exactly, every float to :data:`~tests.tolerance.RERUN_RTOL`
+    (1e-9 relative), the AUCs to :data:`~tests.tolerance.AUC_ATOL`. Not bit for bit:
+    the fit (IRLS, cluster-robust covariance, CV AUCs) runs through numpy's SIMD
+    exp/log and OpenBLAS's kernels, which differ by CPU; on other code paths
+    (``.ci/run``'s second environment) the coefficients and covariance moved by at
+    most 1.7e-12 relative, the in-sample AUC by 7.1e-10 (ties broken). The
+    threshold is chosen on a 0.001 grid, so any real move of it is 0.001."""
     new = json.loads(refit.artifact_path.read_text(encoding="utf-8"))
-    _assert_close(new, shipped)
-    assert refit.coefficients == pytest.approx(shipped["coefficients"], rel=1e-10)
-    assert refit.threshold == shipped["threshold"]["value"]
+    aucs = ("auc", "auc_folds", "auc_mean", "auc_sd", "auc_pooled_out_of_fold", "auc_unweighted")
+    assert_tree_close(new, shipped, rtol=RERUN_RTOL, atol_by_key=dict.fromkeys(aucs, AUC_ATOL))
+    assert refit.coefficients == pytest.approx(shipped["coefficients"], rel=RERUN_RTOL, abs=0.0)
+    assert refit.threshold == pytest.approx(shipped["threshold"]["value"], rel=0.0, abs=1e-9)
     assert refit.data_sha256 == shipped["data"]["sha256"]
 
 
 def test_refit_is_byte_identical(refit: FitReport, tmp_path: Path, shipped: dict[str, Any]) -> None:
+    """Two refits on one machine give the same bytes (determinism; across machines
+    the floats may differ in the last bits: the test above)."""
     again = fit_baseline(
         default_data_path(), tmp_path / "a.json", seed=shipped["seed"], fit_date=shipped["fit_date"]
     )
@@ -76,8 +70,9 @@ def test_refit_is_byte_identical(refit: FitReport, tmp_path: Path, shipped: dict
 def test_refit_loads_and_predicts_like_the_shipped(refit: FitReport) -> None:
     a = BaselineModel.from_artifact(refit.artifact_path)
     b = BaselineModel.from_artifact(default_artifact_path())
-    assert np.allclose(a.coefficients, b.coefficients, rtol=1e-10)
-    assert np.allclose(a.covariance, b.covariance, rtol=1e-8)
+    # a rerun of the same fit on this machine's code paths (see above)
+    np.testing.assert_allclose(a.coefficients, b.coefficients, rtol=RERUN_RTOL, atol=0.0)
+    np.testing.assert_allclose(a.covariance, b.covariance, rtol=RERUN_RTOL, atol=0.0)
 
 
 def test_report_metrics(refit: FitReport) -> None:
@@ -146,8 +141,9 @@ def test_cli_writes_an_artifact(
     printed = capsys.readouterr().out
     assert "threshold" in printed
     doc = json.loads(out.read_text(encoding="utf-8"))
-    # A different CV seed changes the folds, not the fitted coefficients.
-    assert doc["coefficients"] == pytest.approx(shipped["coefficients"], rel=1e-10)
+    # A different CV seed changes the folds, not the fitted coefficients (to the
+    # tolerance of a rerun on this machine's code paths, see above).
+    assert doc["coefficients"] == pytest.approx(shipped["coefficients"], rel=RERUN_RTOL, abs=0.0)
     assert doc["seed"] == 1
 
 

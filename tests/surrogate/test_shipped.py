@@ -17,6 +17,7 @@ from models.lpm.params import load_parameter_set
 from models.surrogate.evaluate import SurrogateFamily, SurrogateLibrary, default_artifact_dir
 from models.surrogate.spec import AGREEMENT_TARGET, MEDIAN_ERROR_TARGET
 from models.surrogate.store import read_artifact
+from tests.tolerance import LPM_CLOSE_SHARE, assert_lpm_close
 
 
 def test_shipped_artifacts_match_the_current_lpm() -> None:
@@ -287,16 +288,27 @@ def test_shipped_head_strike_gates_sort_the_held_out_runs() -> None:
 def test_shipped_heldout_targets_are_todays_direct_lpm_runs() -> None:
     """The held-out figures above compare the surrogates with stored LPM runs; this
     reruns the direct LPM at three stored held-out points of every family and gets
-    the stored outputs bit for bit, so the figures are against the LPM as shipped."""
-    import numpy as np
+    the stored outputs back, so the figures are against the LPM as shipped.
 
+    Not bit for bit: the runs were stored on the build machine, and elsewhere the
+    libm the numba kernels call (glibc's FMA or non-FMA exp/pow) and numba's code
+    for the CPU can change the last bits (issue 22). Every output is held to
+    :data:`~tests.tolerance.LPM_RTOL` (a contact hinge can amplify a last-bit
+    difference: up to 5.7e-4 relative measured over all the stored held-out runs)
+    and 95 % of them to
+    :data:`~tests.tolerance.RERUN_RTOL` (at these points all agree to 7.1e-13 on
+    the other code paths), so a change of the LPM that moves every output a little
+    still fails; the ISS, an integer, moves only if an AIS crosses its threshold."""
     from models.surrogate.build import lpm_runs
     from models.surrogate.evaluate import default_artifact_dir
     from models.surrogate.spec import FAMILIES
     from models.surrogate.store import read_artifact
 
     params = load_parameter_set()
+    close = total = 0
     for spec in FAMILIES:
         arrays, _ = read_artifact(default_artifact_dir() / f"{spec.name}.npz")
         x, y = arrays["heldout_x"][:3], arrays["heldout_y"][:3]
-        np.testing.assert_array_equal(lpm_runs(spec, x, params).y, y, err_msg=spec.name)
+        c, n = assert_lpm_close(lpm_runs(spec, x, params).y, y, context=spec.name)
+        close, total = close + c, total + n
+    assert close >= LPM_CLOSE_SHARE * total, (close, total)

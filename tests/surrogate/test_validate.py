@@ -21,6 +21,7 @@ from models.surrogate.validate import (
     main,
     validate_library,
 )
+from tests.tolerance import RERUN_RTOL, assert_tree_close
 
 #: A cheap family (rear: about 2 ms an LPM run) for the end-to-end checks.
 CHEAP = "rear__male_50th__belted__airbag_any"
@@ -179,10 +180,20 @@ def test_shipped_validation_is_of_the_shipped_library(shipped: SurrogateLibrary)
 
 
 def test_shipped_validation_figures_reproduce(shipped: SurrogateLibrary) -> None:
-    """The stored figures of one family are recomputed bit for bit from fresh LPM runs."""
+    """The stored figures of one family are recomputed from fresh LPM runs: counts
+    exactly, figures to :data:`~tests.tolerance.RERUN_RTOL` (1e-9 relative), not bit
+    for bit. The surrogates' numpy exp/log/power and BLAS kernels differ by CPU, and
+    so did the figures (issue 22: 0.009374192428152635 recomputed on an AMD EPYC
+    against 0.009374192428150829 stored; OpenBLAS's Haswell/SSE3 kernels give the
+    same number here). In the rear family no contact hinge amplified a difference:
+    its LPM runs moved by at most 3e-15 relative between code paths and its figures
+    by at most 4.9e-13 (measured with ``.ci/run``'s second environment), so the
+    tolerance of a same-code rerun applies; a decision that flips changes an agreement share by
+    1/600 and fails."""
     result = json.loads(SHIPPED_JSON.read_text())
     again = validate_library(shipped, families=[CHEAP], coverage_cases=0)
-    assert json.loads(json.dumps(again["families"][CHEAP])) == result["families"][CHEAP]
+    fresh = json.loads(json.dumps(again["families"][CHEAP]))
+    assert_tree_close(fresh, result["families"][CHEAP], rtol=RERUN_RTOL)
 
 
 #: The one fresh-validation miss, with where it sits (VALIDATION.md).
