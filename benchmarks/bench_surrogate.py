@@ -30,7 +30,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from results_md import write_section
 
-from models.surrogate.build import default_config
+from models.offline.surrogate.build import default_config
 from models.surrogate.evaluate import (
     N_SENSOR_SAMPLES,
     SurrogateLibrary,
@@ -67,7 +67,7 @@ def main() -> int:
     args = ap.parse_args()
     timings_path = default_artifact_dir().parent / "build_timings.json"
     if args.rebuild:
-        from models.surrogate.build import main as build_main
+        from models.offline.surrogate.command import main as build_main
 
         with tempfile.TemporaryDirectory() as tmp:
             out = Path(tmp) / "artifacts"

@@ -266,13 +266,13 @@ def _labelled_jsonl(
 
 def _cmd_evaluate(args: argparse.Namespace) -> int:
     """Score labelled notifications: AUC, calibration, triage rates; Markdown + PNG."""
-    from models.field_check import field_cases
     from models.offline.field.evaluate import evaluate_notifications, write_evaluation
     from models.offline.field.rows import (
         load_calibration_rows,
         police_notification,
         row_notification,
     )
+    from models.offline.field_check import field_cases
 
     _settings()
     src = Path(args.file)
@@ -317,7 +317,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
     """Run the occupant models of one notification; print the measures, draw the plot."""
     import dataclasses
 
-    from models.lpm.plot import plot_simulation
+    from models.offline.lpm.plot import plot_simulation
     from models.triage import UnknownVehicleModel, load_engine_models, simulate_notification
     from service.schemas import CrashNotificationIn
 
@@ -384,15 +384,15 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
 #: ``--help``), so ``main`` below hands them their arguments itself.
 _HANDED_OVER: dict[str, tuple[str, str]] = {
     "build-surrogates": (
-        "models.surrogate.build",
+        "models.offline.surrogate.command",
         "build the PCE surrogate artifacts (offline, resumable; numpy only, no chaospy)",
     ),
     "validate-surrogates": (
-        "models.surrogate.validate",
+        "models.offline.surrogate.validate",
         "score the surrogates on fresh direct LPM runs (resumable)",
     ),
     "fit-field": (
-        "models.offline.field.fit",
+        "models.offline.field.command",
         "fit the field risk model on real crashes, cross-validate, write the model card",
     ),
 }
@@ -406,7 +406,7 @@ def _cmd_handed_over(command: str, argv: list[str]) -> int:
 
 
 def _cmd_baseline(args: argparse.Namespace) -> int:
-    from models.baseline.fit import main as fit_main
+    from models.offline.baseline.fit import main as fit_main
 
     argv: list[str] = ["--seed", str(args.seed)]
     if args.data:

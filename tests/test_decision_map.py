@@ -6,9 +6,9 @@ import dataclasses
 
 import pytest
 
-from models.decision_map import MODE_PDOF_DEG, decision_rows, first_positive
 from models.impact_mode import ImpactMode
 from models.notification import Body
+from models.offline.decision_map import MODE_PDOF_DEG, decision_rows, first_positive
 from models.triage import LPM_THRESHOLDS, EngineModels, load_engine_models
 
 

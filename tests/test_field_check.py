@@ -1,4 +1,4 @@
-"""The occupant models' triage against NASS-CDS frontal occupants (models.field_check)."""
+"""The occupant models' triage against NASS-CDS frontal occupants (models.offline.field_check)."""
 
 from __future__ import annotations
 
@@ -7,7 +7,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from models.field_check import (
+from models.notification import AirbagState, Body, Occupant, Seat, summary_notification
+from models.offline.field_check import (
     BANDS,
     POPULATIONS,
     FieldCase,
@@ -21,7 +22,6 @@ from models.field_check import (
     restraint_effects,
     run_field_check,
 )
-from models.notification import AirbagState, Body, Occupant, Seat, summary_notification
 from models.triage import EngineModels, load_engine_models, triage
 from tests.tolerance import assert_printed_numbers_close
 
@@ -34,6 +34,9 @@ def models() -> EngineModels:
 @pytest.fixture(scope="module")
 def check(models: EngineModels) -> FieldCheck:
     return run_field_check(models)
+
+
+ROOT = Path(__file__).resolve().parents[1]
 
 
 def test_cases_are_the_frontal_occupants_with_a_known_outcome() -> None:
@@ -115,7 +118,7 @@ def test_the_bag_protects_the_unbelted_and_not_the_belted_in_the_field_and_the_m
 ) -> None:
     """Pooled over sexes: the field's airbag benefit is for unbelted occupants; for
     belted ones it is not distinguishable from zero, and the models' is about nil
-    (the open item of models/lpm/README.md: the bag can add load to a belted
+    (the open item of docs/lpm/notes.md: the bag can add load to a belted
     occupant whose head does not reach the wheel)."""
     unbelted = _effect(check, "all", "airbag_unbelted")
     belted = _effect(check, "all", "airbag_belted")
@@ -233,7 +236,7 @@ def test_the_restraint_differences_are_band_standardised() -> None:
 
 
 def test_the_shipped_field_check_is_current(check: FieldCheck) -> None:
-    """models/field_check.md is what `python -m models.field_check` writes now, to
+    """docs/field_check/field_check.md is what `python -m models.offline.field_check` writes now, to
     its printed precision: the words and counts equal, each printed figure within
     one unit of its last digit (``tests.tolerance.assert_printed_numbers_close``).
 
@@ -245,7 +248,7 @@ def test_the_shipped_field_check_is_current(check: FieldCheck) -> None:
     ties between occupants' P, and the occupant models' AUC moved from 0.75847 to
     0.75815, a third of its printed unit. A figure can so round the other way at a
     boundary, by one unit and no more; a change of the check beyond that fails."""
-    shipped = (Path(__file__).resolve().parents[1] / "models" / "field_check.md").read_text()
+    shipped = (ROOT / "docs" / "field_check" / "field_check.md").read_text()
     assert_printed_numbers_close(_markdown(check), shipped, what="field_check.md")
 
 

@@ -1,8 +1,8 @@
 """Statistical baseline: survey-weighted logistic regression on NASS-CDS 1997-2000.
 
 Prediction (numpy only) is in :mod:`models.baseline.logistic`; the reproducible
-fit (statsmodels, scikit-learn) is in :mod:`models.baseline.fit`
-(``python -m models.baseline.fit``). See ``MODEL_CARD.md``.
+fit (statsmodels, scikit-learn) is in :mod:`models.offline.baseline.fit`
+(``python -m models.offline.baseline.fit``). See ``MODEL_CARD.md``.
 """
 
 from models.baseline.logistic import (

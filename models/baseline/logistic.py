@@ -1,7 +1,7 @@
 """The statistical baseline at prediction time: load the artifact, predict a risk.
 
-The model is a logistic regression fitted by :mod:`models.baseline.fit` on
-NASS-CDS 1997-2000 (``models/baseline/MODEL_CARD.md``)::
+The model is a logistic regression fitted by :mod:`models.offline.baseline.fit` on
+NASS-CDS 1997-2000 (``docs/baseline/MODEL_CARD.md``)::
 
     logit P(serious injury) = b0 + b1 delta_v_kmh + b2 belted + b3 airbag_deployed
                               + b4 frontal + b5 age_years + b6 male
@@ -17,7 +17,7 @@ training data stored in the artifact (the imputation's own uncertainty is not
 propagated).
 
 This module needs only numpy; the fit (statsmodels, scikit-learn) lives in
-:mod:`models.baseline.fit`.
+:mod:`models.offline.baseline.fit`.
 """
 
 from __future__ import annotations
@@ -53,7 +53,7 @@ __all__ = [
 
 FloatArray = npt.NDArray[np.float64]
 
-#: Identifier of the artifact layout written by :mod:`models.baseline.fit`.
+#: Identifier of the artifact layout written by :mod:`models.offline.baseline.fit`.
 ARTIFACT_SCHEMA: Final[str] = "aacn-triage/baseline-logistic/1"
 
 #: Model name and version written into the artifact (bump the version on refit
@@ -239,7 +239,7 @@ class BaselineModel:
 
     @classmethod
     def from_artifact(cls, path: str | Path) -> BaselineModel:
-        """Load and validate a JSON artifact written by :mod:`models.baseline.fit`.
+        """Load and validate a JSON artifact written by :mod:`models.offline.baseline.fit`.
 
         Parameters
         ----------

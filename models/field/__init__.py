@@ -2,7 +2,7 @@
 
 Fitted offline on real NASS-CDS crashes (:mod:`models.field.fit`, ``aacn-triage
 fit-field``), shipped as a JSON artifact with its checksum and model card
-(``models/field/MODEL_CARD.md``), served with numpy only
+(``docs/field/MODEL_CARD.md``), served with numpy only
 (:mod:`models.field.model`). Its probability is the one the service decides on;
 the occupant models' answer stays in every response as the physics explanation.
 """

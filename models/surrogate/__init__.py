@@ -1,6 +1,6 @@
 """Polynomial chaos surrogates of the occupant LPMs (issue 5).
 
-Offline, :mod:`models.surrogate.build` (``aacn-triage build-surrogates``) runs
+Offline, :mod:`models.offline.surrogate.build` (``aacn-triage build-surrogates``) runs
 the LPMs on Latin hypercube designs and fits sparse arbitrary PCEs with 150
 bootstrap replicates per output; the artifacts (npz + ``manifest.json``) live
 in ``models/surrogate/artifacts``. On the request path,

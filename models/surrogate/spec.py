@@ -163,7 +163,7 @@ INPUT_NAMES: Final[tuple[str, ...]] = (
 #: piece at 77.5 ms of duration as well (600 runs each side): HIC15 13.9 ->
 #: 13.1 %, Nij 15.5 -> 13.3 % on its 78 held-out points, no remedy either.
 #: The head-clearance split is built since 2026-12-02 in every piece where
-#: both sides hold enough runs (models.surrogate.build.BuildConfig
+#: both sides hold enough runs (models.offline.surrogate.build.BuildConfig
 #: split_min_side_runs, split_band_mm); REPORT.md Table E lists them.
 #: Measured after it, not adopted (2026-12-02): 1200 runs per piece instead
 #: of 600 (build time x2): belted 5F without airbag HIC15 / Nij 9.4 / 6.3 ->
@@ -306,7 +306,7 @@ P_RESOLUTION: Final[float] = 2.0 * LOGIT_CLIP
 #: rigid interior over the run, mm (models.lpm.simulate.head_clearance_mm),
 #: fitted on its own (identity) scale. Pieces where the head strikes the
 #: interior in part of the design are fitted on each side of the strike onset
-#: (models.surrogate.build, :data:`DELTA_V_PIECES_KMH` for the measurements).
+#: (models.offline.surrogate.build, :data:`DELTA_V_PIECES_KMH` for the measurements).
 HEAD_CLEARANCE: Final[str] = "head_clearance_mm"
 
 #: Accuracy targets of the surrogates against direct LPM runs (issue 5): the

@@ -1,4 +1,4 @@
-"""Tests of the reproducible fit `models.baseline.fit`."""
+"""Tests of the reproducible fit `models.offline.baseline.fit`."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ import pytest
 import statsmodels.api as sm
 
 from models.baseline import BaselineModel, default_artifact_path
-from models.baseline.fit import (
+from models.offline.baseline.fit import (
     DELTA_V_BAND_MIDPOINTS_KMH,
     FitReport,
     _load,

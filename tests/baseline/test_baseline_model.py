@@ -24,7 +24,7 @@ from models.baseline import (
 from models.baseline.logistic import FEATURE_NAMES, MODEL_NAME, MODEL_VERSION, Z_95
 from models.notification import Sex
 
-MODEL_CARD = Path(default_artifact_path()).parents[1] / "MODEL_CARD.md"
+MODEL_CARD = Path(__file__).resolve().parents[2] / "docs" / "baseline" / "MODEL_CARD.md"
 
 
 @pytest.fixture(scope="module")
@@ -66,7 +66,9 @@ def test_shipped_artifact_loads(model: BaselineModel, artifact: dict[str, Any]) 
     assert np.array_equal(model.coefficients, artifact["coefficients"])
     assert model.data_sha256 == artifact["data"]["sha256"]
     # The shipped data file is the one the artifact was fitted on.
-    data = default_artifact_path().parents[1] / "data" / artifact["data"]["file"]
+    from models.offline.paths import DATA_DIR
+
+    data = DATA_DIR / artifact["data"]["file"]
     assert hashlib.sha256(data.read_bytes()).hexdigest() == model.data_sha256
 
 

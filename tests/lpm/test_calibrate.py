@@ -7,8 +7,8 @@ from pathlib import Path
 
 import numpy as np
 
-from models.lpm.calibrate import DEFAULT_TARGETS, calibrate, load_cases
 from models.lpm.params import ParameterSet, load_parameter_set
+from models.offline.lpm.calibrate import DEFAULT_TARGETS, calibrate, load_cases
 
 PARAMS = ["frontal.airbag.head_force=1500:3000"]
 

@@ -9,10 +9,10 @@ import pytest
 
 from models.impact_mode import ImpactMode
 from models.lpm.params import ParameterSet
-from models.lpm.plot import _nij_terms, plot_simulation
 from models.lpm.pulses import ncap_frontal_pulse, side_pulse
 from models.lpm.simulate import simulate
 from models.notification import Body
+from models.offline.lpm.plot import _nij_terms, plot_simulation
 from tests.lpm.helpers import occupant
 
 

@@ -44,7 +44,7 @@ def _check_monotone(rows: list[dict[str, float]], label: str) -> list[str]:
 
 
 def _known(reason: str) -> pytest.MarkDecorator:
-    """A documented model deficiency (open item in models/lpm/README.md)."""
+    """A documented model deficiency (open item in docs/lpm/notes.md)."""
     return pytest.mark.xfail(strict=True, reason=reason)
 
 
@@ -169,7 +169,8 @@ def test_airbag_lowers_every_head_and_chest_measure_leaning_forward(
                 " tests saw the same: the airbag's distributed load gave an even higher HIC"
                 " than the steering wheel's concentrated one (SAE 851247, 1985), and in NASS-CDS"
                 " frontal crashes the bag made no difference to belted occupants distinguishable"
-                " from zero (models/field_check.md); leaning forward, or at her regulatory"
+                " from zero (docs/field_check/field_check.md); leaning forward, or at her"
+                " regulatory"
                 " seating, the bag lowers HIC15 and Nij (tested)"
             ),
         ),

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-from models.surrogate.build import BuildConfig, build_family, write_manifest
+from models.offline.surrogate.build import BuildConfig, build_family, write_manifest
 from models.surrogate.spec import FAMILIES, FamilySpec
 
 TINY_NAME = "frontal__male_50th__belted__airbag"

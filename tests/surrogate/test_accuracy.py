@@ -12,7 +12,7 @@ import pytest
 
 from models.impact_mode import ImpactMode
 from models.notification import Body
-from models.surrogate.build import ISS15_DECISION_PROBABILITY, lpm_outputs
+from models.offline.surrogate.build import ISS15_DECISION_PROBABILITY, lpm_outputs
 from models.surrogate.evaluate import (
     _NORMALS,
     DEFAULT_POSTURE_SD_DEG,
@@ -31,7 +31,7 @@ MIN_COVERAGE = 0.90
 
 
 #: Measures whose median relative error misses the 5 % target on the tiny
-#: 250-run family (the shipped families meet it: models/surrogate/REPORT.md):
+#: 250-run family (the shipped families meet it: docs/surrogate/REPORT.md):
 #: HIC15 and Nij have kinks in posture, seat track and duration (contact
 #: onset, HIC window switches, the Nij load case switching) that a sparse
 #: polynomial on 250 runs does not resolve; they are held to a regression

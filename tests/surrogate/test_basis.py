@@ -7,6 +7,7 @@ from math import comb
 import numpy as np
 import pytest
 
+from models.offline.surrogate.build import latin_hypercube
 from models.surrogate.basis import (
     design_matrix,
     evaluate_univariate,
@@ -14,7 +15,6 @@ from models.surrogate.basis import (
     stieltjes,
     uniform_recurrence,
 )
-from models.surrogate.build import latin_hypercube
 
 
 def test_stieltjes_on_gauss_legendre_is_legendre() -> None:

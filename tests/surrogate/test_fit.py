@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from models.offline.surrogate.build import latin_hypercube
+from models.offline.surrogate.fit import fit_adaptive, fit_degree, loo_error, nested_ols_loo
 from models.surrogate.basis import design_matrix, hyperbolic_multi_indices, stieltjes
-from models.surrogate.build import latin_hypercube
-from models.surrogate.fit import fit_adaptive, fit_degree, loo_error, nested_ols_loo
 
 
 def _basis(n: int, dim: int, degree: int, seed: int = 0) -> tuple[np.ndarray, np.ndarray]:
@@ -73,7 +73,7 @@ def test_lar_order_matches_scikit_learn(seed: int) -> None:
     """Our LAR (written for its low per-step overhead) selects in sklearn's order."""
     from sklearn.linear_model import lars_path
 
-    from models.surrogate.fit import lar_order
+    from models.offline.surrogate.fit import lar_order
 
     rng = np.random.default_rng(seed)
     x = rng.standard_normal((80, 12))

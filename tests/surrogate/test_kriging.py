@@ -7,9 +7,9 @@ from typing import Any
 import numpy as np
 import pytest
 
+from models.offline.surrogate.report import without_kriging
 from models.surrogate.evaluate import SurrogateLibrary, default_artifact_dir
 from models.surrogate.kriging import ResidualKriging, fit_residual_kriging
-from models.surrogate.report import without_kriging
 from models.surrogate.spec import INPUT_NAMES
 
 
@@ -104,7 +104,7 @@ def test_the_kriging_is_fitted_on_at_most_kriging_max_runs(
     """The request-path kernel is (sensor samples x Kriging runs): the runs are the
     first finite design rows, at most the ``kriging_max_runs`` each artifact's
     build recorded (its ``config``), and the shipped builds are default ones."""
-    from models.surrogate.build import default_config
+    from models.offline.surrogate.build import default_config
 
     for name, fam in shipped_library.families().items():
         cap = int(fam.meta["config"]["kriging_max_runs"])

@@ -12,13 +12,13 @@ import pytest
 
 from models.impact_mode import ImpactMode
 from models.notification import Body
-from models.surrogate.build import (
+from models.offline.surrogate.build import (
     BuildConfig,
     build_family,
     is_current,
-    main,
     write_manifest,
 )
+from models.offline.surrogate.command import main
 from models.surrogate.evaluate import SurrogateFamily, SurrogateLibrary
 from models.surrogate.store import read_artifact
 from tests.surrogate.conftest import TINY_DELTA_V, TINY_NAME, tiny_spec

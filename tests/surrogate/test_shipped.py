@@ -86,7 +86,7 @@ def test_shipped_heldout_agreement_at_the_service_decision(
     """Pooled over the 24 families, the surrogate and the LPM take the same decision as
     the service does (zero-load-corrected P(ISS >= 15) against the mode's threshold) on
     more than 97 % of the held-out points (REPORT.md)."""
-    from models.surrogate.report import service_raw_threshold
+    from models.offline.surrogate.report import service_raw_threshold
 
     agree: list[bool] = []
     for name, h in heldout.items():
@@ -129,7 +129,7 @@ def test_shipped_p_interval_covers_the_monte_carlo_value() -> None:
     direct LPM runs over the sensor distribution in at least 90% of them."""
     import numpy as np
 
-    from models.surrogate.report import coverage_check
+    from models.offline.surrogate.report import coverage_check
 
     rows = coverage_check(SurrogateLibrary.load(), 40, seed=7)
     assert float(np.mean([r["hit"] for r in rows])) >= 0.90
@@ -169,7 +169,7 @@ def test_shipped_measure_intervals_hold_the_direct_lpm_outcomes() -> None:
     73 %, VC 84 %, 3 ms acceleration 85 %, Nij 89 %), which this test rejects."""
     import numpy as np
 
-    from models.surrogate.report import measure_coverage_check
+    from models.offline.surrogate.report import measure_coverage_check
 
     shares = measure_coverage_check(SurrogateLibrary.load().families(), 24, seed=13)
     assert set(shares) >= {"hic15", "nij", "chest_deflection_mm", "iss"}
@@ -299,7 +299,7 @@ def test_shipped_heldout_targets_are_todays_direct_lpm_runs() -> None:
     :data:`~tests.tolerance.RERUN_RTOL` (at these points all agree to 7.1e-13 on
     the other code paths), so a change of the LPM that moves every output a little
     still fails; the ISS, an integer, moves only if an AIS crosses its threshold."""
-    from models.surrogate.build import lpm_runs
+    from models.offline.surrogate.build import lpm_runs
     from models.surrogate.evaluate import default_artifact_dir
     from models.surrogate.spec import FAMILIES
     from models.surrogate.store import read_artifact

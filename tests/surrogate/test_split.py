@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from models.surrogate.build import BuildConfig, fit_family, from_unit, latin_hypercube
+from models.offline.surrogate.build import BuildConfig, fit_family, from_unit, latin_hypercube
 from models.surrogate.evaluate import SurrogateFamily
 from models.surrogate.spec import FAMILIES, INPUT_NAMES, FamilySpec
 

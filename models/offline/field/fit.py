@@ -1,6 +1,6 @@
 """Fit the field risk model on real crashes and measure it by cross-validation.
 
-``aacn-triage fit-field`` runs :func:`fit_field`:
+``aacn-triage fit-field`` (:mod:`.command`) runs :func:`fit_field`:
 
 1. **Rows.** The NASS-CDS 2000-2014 MAIS calibration file (4,856 adults, 140
    MAIS 3+, all crash modes; ``data/PROVENANCE.md``) is turned into the
@@ -46,11 +46,9 @@
 
 from __future__ import annotations
 
-import argparse
 import hashlib
 import json
 import math
-import sys
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
 from datetime import UTC, datetime
@@ -64,8 +62,6 @@ from sklearn.linear_model import LogisticRegression
 from sklearn.model_selection import RepeatedStratifiedKFold, StratifiedKFold
 from tqdm import tqdm
 
-from models.baseline.fit import DELTA_V_BAND_MIDPOINTS_KMH
-from models.baseline.fit import default_data_path as police_data_path
 from models.field.features import (
     FEATURE_NAMES,
     FieldInputs,
@@ -80,8 +76,9 @@ from models.field.model import (
     default_artifact_path,
     feature_code_sha256,
 )
-from models.field_check import FieldCase, field_cases
 from models.notification import Sex
+from models.offline.baseline.fit import DELTA_V_BAND_MIDPOINTS_KMH
+from models.offline.baseline.fit import default_data_path as police_data_path
 from models.offline.field.evidence import RowEvidence, evidence_for
 from models.offline.field.metrics import (
     auc,
@@ -98,6 +95,7 @@ from models.offline.field.rows import (
     police_notification,
     row_notification,
 )
+from models.offline.field_check import FieldCase, field_cases
 from models.triage import notification_field_inputs
 
 __all__ = [
@@ -109,7 +107,6 @@ __all__ = [
     "FieldFit",
     "ModelScores",
     "fit_field",
-    "main",
 ]
 
 FloatArray = npt.NDArray[np.float64]
@@ -636,7 +633,7 @@ def fit_field(
             "female_share": sex.female_share,
             "bootstrap": sex.bootstrap.tolist(),
             "source": (
-                "NASS-CDS 1997-2000 (models/baseline/data), survey-weighted logistic "
+                "NASS-CDS 1997-2000 (models/offline/data), survey-weighted logistic "
                 "regression of police-reported A+K injury on delta-V band, belt, age, "
                 "sex, airbag fitted and deployed"
             ),
@@ -869,28 +866,3 @@ def write_artifact(doc: dict[str, Any], path: Path | None = None) -> Path:
     target.parent.mkdir(parents=True, exist_ok=True)
     target.write_text(json.dumps(doc, indent=1, allow_nan=False) + "\n", encoding="utf-8")
     return target
-
-
-def main(argv: Sequence[str] | None = None) -> int:
-    """``aacn-triage fit-field``: fit, write the artifact and the model card."""
-    parser = argparse.ArgumentParser(
-        prog="aacn-triage fit-field", description=__doc__.split("\n")[0]
-    )
-    parser.add_argument(
-        "--out", type=Path, default=None, help="report directory (default docs/field)"
-    )
-    parser.add_argument(
-        "--artifact", type=Path, default=None, help="artifact path (default: shipped)"
-    )
-    parser.add_argument("--cache", type=Path, default=None, help="engine-run cache directory")
-    parser.add_argument("--workers", type=int, default=None, help="processes (default CPU count)")
-    parser.add_argument("--quick", action="store_true", help="few repeats and refits (a smoke run)")
-    args = parser.parse_args(argv)
-    from models.offline.field.report import default_report_dir, write_model_card
-
-    cfg = FitConfig(n_repeats=2, n_bootstrap=20, n_metric_bootstrap=200) if args.quick else None
-    fit = fit_field(cfg, cache_dir=args.cache, workers=args.workers)
-    path = write_artifact(fit.artifact, args.artifact)
-    card = write_model_card(fit, args.out or default_report_dir())
-    sys.stderr.write(f"artifact: {path}\nmodel card: {card}\n")
-    return 0

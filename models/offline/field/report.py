@@ -19,16 +19,14 @@ from matplotlib.figure import Figure
 from models.field.features import FEATURE_NAMES, FieldInputs, FieldMode, Imputation, design_matrix
 from models.offline.field.evaluate import evaluation_markdown, reliability_plot
 from models.offline.field.fit import FieldFit
+from models.offline.paths import docs_dir
 
 __all__ = ["default_report_dir", "risk_curve_plot", "write_model_card"]
 
 
 def default_report_dir() -> Path:
     """``docs/field`` of the repository when run from a checkout, else ``./docs/field``."""
-    repo = Path(__file__).resolve().parents[3]
-    if (repo / "pyproject.toml").is_file():
-        return repo / "docs" / "field"
-    return Path.cwd() / "docs" / "field"
+    return docs_dir("field")
 
 
 def _f(x: float, nd: int = 3) -> str:
@@ -382,9 +380,9 @@ def write_model_card(fit: FieldFit, out_dir: Path) -> Path:
         "",
         "## Provenance",
         "",
-        f"- Calibration data: `models/offline/field/data/nass-cds-mais-2000-2014-calibration.csv`, "
+        f"- Calibration data: `models/offline/data/nass-cds-mais-2000-2014-calibration.csv`, "
         f"sha256 `{data['calibration_csv_sha256']}` (PROVENANCE.md beside it).",
-        f"- Police-outcome data: `models/baseline/data/nass-cds-1997-2000.csv`, sha256 "
+        f"- Police-outcome data: `models/offline/data/nass-cds-1997-2000.csv`, sha256 "
         f"`{data['police_csv_sha256']}`.",
         f"- Feature code checksum (normalised syntax tree): `{doc['feature_code_sha256']}`.",
         f"- Artifact content checksum: `{doc['content_sha256']}`.",

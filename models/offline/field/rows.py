@@ -33,7 +33,6 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Final
 
-from models.field_check import FieldCase
 from models.notification import (
     AirbagState,
     Body,
@@ -46,6 +45,8 @@ from models.notification import (
     SummaryPulse,
     nearest_body,
 )
+from models.offline.field_check import FieldCase
+from models.offline.paths import DATA_DIR
 
 __all__ = [
     "ASSUMED_DEPLOY_DELTA_V_KMH",
@@ -60,9 +61,7 @@ __all__ = [
 ]
 
 #: The shipped calibration file (PROVENANCE.md beside it).
-CALIBRATION_CSV: Final[Path] = (
-    Path(__file__).resolve().parent / "data" / "nass-cds-mais-2000-2014-calibration.csv"
-)
+CALIBRATION_CSV: Final[Path] = DATA_DIR / "nass-cds-mais-2000-2014-calibration.csv"
 
 #: The file's crash modes.
 CRASH_MODES: Final[tuple[str, ...]] = ("Frontal", "NS", "FS", "Rear", "roll")

@@ -14,7 +14,7 @@ Per family (:data:`models.surrogate.spec.FAMILIES`):
    on a hyperbolic multi-index set (q = :data:`Q_NORM`) of degree up to 15.
 3. Per output (each measure on a log scale, P(ISS >= 15) on a logit scale, ISS):
    hybrid LAR with the degree chosen by the corrected analytic LOO
-   (:mod:`models.surrogate.fit`); then :attr:`BuildConfig.n_boot` bootstrap
+   (:mod:`models.offline.surrogate.fit`); then :attr:`BuildConfig.n_boot` bootstrap
    replicates, each *rerunning the LAR selection* on resampled rows at the
    chosen degree (``pce-notes.md``: a fixed basis gives bands far too narrow).
 4. One artifact ``<family>.npz`` (no pickles) and ``manifest.json`` with the
@@ -23,24 +23,21 @@ Per family (:data:`models.surrogate.spec.FAMILIES`):
 Seeded and reproducible bit for bit (single-threaded BLAS per worker, fixed
 member order and timestamps in the files), parallel over processes, resumable
 (a family whose artifact records the same configuration is skipped),
-``--family NAME`` rebuilds one family. chaospy is not needed (the Stieltjes
+``--family NAME`` rebuilds one family (``aacn-triage build-surrogates``,
+:mod:`.command`). chaospy is not needed (the Stieltjes
 recurrence and LAR are a few lines of numpy); it is used only by the tests to
 cross-check the basis.
 """
 
 from __future__ import annotations
 
-import argparse
 import hashlib
 import json
-import os
 import platform
-import sys
 import time
 import zlib
 from collections.abc import Mapping, Sequence
-from concurrent.futures import ProcessPoolExecutor, as_completed
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
 
@@ -48,17 +45,23 @@ import numpy as np
 import numpy.typing as npt
 
 from models import ENGINE_VERSION
+from models.offline.surrogate.fit import MAX_DEGREE, SparseFit, fit_adaptive, fit_degree
+from models.offline.surrogate.runs import (
+    ISS15_DECISION_PROBABILITY,
+    LpmRuns,
+    heldout_scores,
+    lpm_outputs,
+    lpm_runs,
+)
 from models.surrogate.basis import (
     design_matrix,
     graded_counts,
     hyperbolic_multi_indices,
     stieltjes,
 )
-from models.surrogate.fit import MAX_DEGREE, SparseFit, fit_adaptive, fit_degree
 from models.surrogate.kriging import fit_residual_kriging
 from models.surrogate.spec import (
     DELTA_V_PIECES_KMH,
-    FAMILIES,
     HEAD_CLEARANCE,
     INPUT_NAMES,
     LOG_INPUTS,
@@ -94,7 +97,6 @@ __all__ = [
     "LpmRuns",
     "lpm_outputs",
     "lpm_runs",
-    "main",
     "standardise",
     "write_manifest",
 ]
@@ -108,15 +110,6 @@ DEFAULT_SEED = 20261123
 Q_NORM = 0.5
 #: Number of bootstrap replicates (reference paper section 2.5, after its ref. [15]).
 N_BOOTSTRAP = 150
-#: An ISS15+ decision from a probability: P(ISS >= 15) >= 0.5 (the more likely class).
-ISS15_DECISION_PROBABILITY = 0.5
-#: Sampling rate of the haversine pulses fed to the LPM, Hz (the service's
-#: models.pulse.DEFAULT_OUTPUT_RATE_HZ).
-PULSE_RATE_HZ = 10_000.0
-#: Simulated duration, s (models.lpm.simulate default).
-SIMULATED_S = 0.2
-#: Mode axis (deg clockwise) for an occupant on the right (models.impact_mode).
-_AXIS_DEG = {"frontal": 0.0, "near_side": 90.0, "rear": 180.0, "far_side": 270.0}
 
 
 @dataclass(frozen=True)
@@ -241,108 +234,6 @@ def from_unit(z: npt.ArrayLike, ranges: Sequence[tuple[float, float]]) -> FloatA
 def _seed(config: BuildConfig, *keys: str) -> np.random.Generator:
     words = [config.seed] + [zlib.crc32(k.encode()) for k in keys]
     return np.random.default_rng(np.random.SeedSequence(words))
-
-
-@dataclass(frozen=True)
-class LpmRuns:
-    """Direct LPM runs at the points of a design.
-
-    Attributes
-    ----------
-    y : ndarray, shape (n, n_outputs)
-        Physical values of the family's outputs (NaN where the run failed).
-    status : ndarray of int64, shape (n,)
-    head_clearance_mm : ndarray, shape (n,)
-        :func:`models.lpm.simulate.head_clearance_mm` of each run (NaN where it failed).
-    """
-
-    y: FloatArray
-    status: npt.NDArray[np.int64]
-    head_clearance_mm: FloatArray
-
-
-def lpm_outputs(
-    spec: FamilySpec, x: npt.ArrayLike, params: Any = None
-) -> tuple[FloatArray, npt.NDArray[np.int64]]:
-    """Direct LPM runs at raw input points of a family (outputs and status).
-
-    See :func:`lpm_runs`.
-    """
-    runs = lpm_runs(spec, x, params)
-    return runs.y, runs.status
-
-
-def lpm_runs(spec: FamilySpec, x: npt.ArrayLike, params: Any = None) -> LpmRuns:
-    """Direct LPM runs at raw input points of a family.
-
-    Parameters
-    ----------
-    spec : FamilySpec
-    x : array_like, shape (n, 5)
-        Columns of :data:`models.surrogate.spec.INPUT_NAMES` (km/h, deg, deg, mm, ms).
-    params : ParameterSet, optional
-        Default: ``load_parameter_set()``.
-
-    Returns
-    -------
-    LpmRuns
-    """
-    from models.impact_mode import ImpactMode
-    from models.lpm.params import load_parameter_set
-    from models.lpm.simulate import head_clearance_mm, simulate
-    from models.notification import AirbagState, Occupant, Seat
-    from models.pulse import STANDARD_GRAVITY, haversine
-
-    ps = load_parameter_set() if params is None else params
-    occ0 = Occupant(
-        seat=Seat.DRIVER,
-        body=spec.body,
-        belted=spec.belted,
-        frontal_airbag=(
-            AirbagState.DEPLOYED
-            if spec.mode is ImpactMode.FRONTAL and spec.airbag_deployed
-            else AirbagState.NOT_DEPLOYED
-        ),
-        side_airbag=(
-            AirbagState.DEPLOYED
-            if spec.mode is ImpactMode.NEAR_SIDE and spec.airbag_deployed
-            else AirbagState.ABSENT
-        ),
-    )
-    xv = np.atleast_2d(np.asarray(x, dtype=np.float64))
-    t = np.arange(int(round(SIMULATED_S * PULSE_RATE_HZ)) + 1) / PULSE_RATE_HZ
-    y = np.full((xv.shape[0], len(spec.outputs)), np.nan)
-    status = np.zeros(xv.shape[0], dtype=np.int64)
-    clearance = np.full(xv.shape[0], np.nan)
-    for i, (dv, ang, posture, seat, dur) in enumerate(xv):
-        tsec = dur / 1000.0
-        amp = 2.0 * (dv / 3.6) / (STANDARD_GRAVITY * tsec)
-        pdof = np.radians(_AXIS_DEG[spec.mode.value] + ang)
-        h = haversine(t, amp, tsec)
-        occ = replace(occ0, posture_lumbar_flexion_deg=float(posture), seat_track_mm=float(seat))
-        r = simulate(
-            t,
-            -np.cos(pdof) * h,
-            -np.sin(pdof) * h,
-            spec.mode,
-            occ,
-            ps,
-            angle_deg=float(ang),
-            duration_s=SIMULATED_S,
-        )
-        status[i] = r.status
-        if r.status < 0 or r.assessment is None:
-            continue
-        clearance[i] = head_clearance_mm(r)
-        for j, name in enumerate(spec.outputs):
-            if name == "p_iss15":
-                y[i, j] = r.assessment.p_iss15
-            elif name == "iss":
-                y[i, j] = r.assessment.iss
-            else:
-                v = getattr(r.measures, name)
-                y[i, j] = np.nan if v is None else float(v)
-    return LpmRuns(y, status, clearance)
 
 
 @dataclass(frozen=True)
@@ -570,56 +461,6 @@ def _checks() -> dict[str, str]:
     }
 
 
-def relative_error(y_pred: npt.ArrayLike, y_true: npt.ArrayLike) -> FloatArray:
-    """|y_pred - y_true| / |y_true| elementwise (a zero true value divides by 1e-12)."""
-    a = np.asarray(y_true, dtype=np.float64)
-    b = np.asarray(y_pred, dtype=np.float64)
-    return np.asarray(np.abs(b - a) / np.maximum(np.abs(a), 1e-12), dtype=np.float64)
-
-
-def heldout_scores(spec: FamilySpec, y_true: FloatArray, y_pred: FloatArray) -> dict[str, Any]:
-    """Surrogate against direct LPM values on held-out points (REPORT.md Table B).
-
-    Parameters
-    ----------
-    spec : FamilySpec
-    y_true, y_pred : ndarray, shape (n, n_outputs)
-        Direct LPM and surrogate values of ``spec.outputs`` (rows with a NaN
-        LPM value are skipped).
-
-    Returns
-    -------
-    dict
-        ``n``; per measure the median and 90th percentile relative error and
-        R^2; per score (P(ISS >= 15), ISS) the median absolute error and R^2;
-        the ISS15+ decision agreement from P (>= 0.5) and from the ISS (>= 15);
-        the LPM's ISS15+ share.
-    """
-    ok = np.all(np.isfinite(y_true), axis=1)
-    yt, yp = y_true[ok], y_pred[ok]
-    out: dict[str, Any] = {"n": int(ok.sum())}
-    for j, name in enumerate(spec.outputs):
-        a, b = yt[:, j], yp[:, j]
-        if name in ("p_iss15", "iss"):
-            err = np.abs(b - a)
-            out[name] = {"median_abs_error": float(np.median(err))}
-        else:
-            rel = relative_error(b, a)
-            out[name] = {
-                "median_rel_error": float(np.median(rel)),
-                "p90_rel_error": float(np.quantile(rel, 0.9)),
-            }
-        ss = float(np.sum((a - a.mean()) ** 2))
-        out[name]["r2"] = float(1.0 - np.sum((b - a) ** 2) / ss) if ss > 0 else 1.0
-    jp = spec.outputs.index("p_iss15")
-    ji = spec.outputs.index("iss")
-    thr = ISS15_DECISION_PROBABILITY
-    out["decision_agreement_p"] = float(np.mean((yt[:, jp] >= thr) == (yp[:, jp] >= thr)))
-    out["decision_agreement_iss"] = float(np.mean((yt[:, ji] >= 15) == (yp[:, ji] >= 15)))
-    out["iss15_share_lpm"] = float(np.mean(yt[:, ji] >= 15))
-    return out
-
-
 def _fit_kriging(
     spec: FamilySpec,
     piece_arrays: Mapping[str, npt.NDArray[Any]],
@@ -797,166 +638,3 @@ def write_manifest(directory: Path, config: BuildConfig) -> dict[str, Any]:
     }
     write_json(directory / MANIFEST_NAME, manifest)
     return manifest
-
-
-def _worker_init() -> None:
-    os.environ.setdefault("OMP_NUM_THREADS", "1")
-    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
-
-
-def main(argv: Sequence[str] | None = None) -> int:
-    """Command line: build (or rebuild) the surrogate families.
-
-    ``--family NAME`` (repeatable) rebuilds only those families; without it,
-    the families whose artifact is missing or records another configuration
-    or other LPM checksums are built and the others skipped (resumable);
-    ``--force`` rebuilds all; ``--workers N`` processes (default: CPU count);
-    ``--out DIR`` (default: the shipped artifact directory); ``--n-train``,
-    ``--n-holdout``, ``--n-boot``, ``--seed`` override the configuration;
-    ``--no-report`` skips REPORT.md, the plots and the fresh validation
-    (``VALIDATION.md``, :mod:`models.surrogate.validate`, run when every family
-    is present).
-
-    Returns
-    -------
-    int
-        0 on success, 1 when the LPM code or parameters changed during the
-        build (stale families; rerun), 2 on an unknown family name.
-    """
-    from tqdm import tqdm
-
-    from models.surrogate.evaluate import default_artifact_dir
-
-    ap = argparse.ArgumentParser(
-        prog="aacn-triage build-surrogates", description=__doc__.split("\n")[0]
-    )
-    ap.add_argument(
-        "--family", action="append", default=[], help="rebuild this family (repeatable)"
-    )
-    ap.add_argument("--force", action="store_true", help="rebuild every family")
-    ap.add_argument("--workers", type=int, default=os.cpu_count() or 1)
-    ap.add_argument("--out", type=Path, default=None)
-    d = default_config()
-    ap.add_argument(
-        "--n-train",
-        type=int,
-        default=None,
-        help=f"design size per delta-V piece for every mode (default {d.n_train}, "
-        + ", ".join(f"{m} {n}" for m, n in d.n_train_by_mode)
-        + ")",
-    )
-    ap.add_argument("--n-holdout", type=int, default=d.n_holdout)
-    ap.add_argument("--n-boot", type=int, default=d.n_boot)
-    ap.add_argument("--seed", type=int, default=d.seed)
-    ap.add_argument("--no-report", action="store_true")
-    args = ap.parse_args(list(argv) if argv is not None else None)
-    config = replace(d, n_holdout=args.n_holdout, n_boot=args.n_boot, seed=args.seed)
-    if args.n_train is not None:
-        config = replace(config, n_train=args.n_train, n_train_by_mode=())
-    directory: Path = args.out or default_artifact_dir()
-    directory.mkdir(parents=True, exist_ok=True)
-    names = {s.name: s for s in FAMILIES}
-    unknown = [f for f in args.family if f not in names]
-    if unknown:
-        sys.stderr.write(f"unknown family {unknown}; known: {', '.join(names)}\n")
-        return 2
-    checks = _checks()
-    if args.family:
-        todo = [names[f] for f in dict.fromkeys(args.family)]
-    else:
-        todo = [
-            s
-            for s in FAMILIES
-            if args.force or not is_current(directory / f"{s.name}.npz", s, config, checks)
-        ]
-    skipped = len(FAMILIES) - len(todo)
-    t0 = time.perf_counter()
-    results: list[dict[str, Any]] = []
-    with tqdm(total=len(todo), desc="surrogate families", unit="family", file=sys.stderr) as bar:
-        if args.family:
-            bar.write(f"rebuilding {len(todo)} named families")
-        elif skipped:
-            bar.write(f"{skipped} families current, skipped")
-        if args.workers <= 1:
-            for s in todo:
-                results.append(build_family(s, directory, config))
-                bar.update(1)
-        else:
-            _worker_init_env()
-            with ProcessPoolExecutor(max_workers=args.workers, initializer=_worker_init) as ex:
-                futs = [ex.submit(build_family, s, directory, config) for s in todo]
-                for fut in as_completed(futs):
-                    results.append(fut.result())
-                    bar.update(1)
-    total = time.perf_counter() - t0
-    stale = [
-        s.name
-        for s in FAMILIES
-        if (directory / f"{s.name}.npz").exists()
-        and not is_current(directory / f"{s.name}.npz", s, config)
-    ]
-    if stale and not args.family:
-        # the LPM code or parameters changed while building: rerun to rebuild those
-        sys.stderr.write(
-            "LPM code or parameter set changed during the build; stale families: "
-            + ", ".join(stale)
-            + "\nrerun the build (it resumes and rebuilds only those)\n"
-        )
-        return 1
-    manifest = write_manifest(directory, config)
-    # build timings are machine-dependent: a side file, not part of the manifest.
-    # "total_seconds" is the last build that built every family; per-family
-    # entries are those of the latest build of each family.
-    tpath = directory.parent / "build_timings.json"
-    try:
-        timings: dict[str, Any] = json.loads(tpath.read_text()) if tpath.exists() else {}
-    except ValueError:
-        timings = {}
-    timings.setdefault("families", {}).update({r["family"]: r for r in results})
-    # families that are no longer built (a split or renamed family) drop out
-    built = {spec.name for spec in FAMILIES}
-    timings["families"] = {k: v for k, v in timings["families"].items() if k in built}
-    if len(results) == len(FAMILIES):
-        timings["total_seconds"] = total
-        timings["workers"] = args.workers
-    if results:
-        write_json(tpath, timings)
-    if not args.no_report:
-        from models.surrogate.report import write_report
-
-        t_rep = time.perf_counter()
-        write_report(directory, directory.parent)
-        t_val = time.perf_counter()
-        _validate_after_build(directory)
-        if results:
-            timings["report_seconds"] = t_val - t_rep
-            timings["validation_seconds"] = time.perf_counter() - t_val
-            write_json(tpath, timings)
-    sys.stderr.write(
-        f"built {len(results)} families in {total:.1f} s; manifest {manifest['version']}\n"
-    )
-    return 0
-
-
-def _validate_after_build(directory: Path) -> None:
-    """Rerun the fresh validation (VALIDATION.md) when the library is complete."""
-    from models.surrogate.evaluate import SurrogateLibrary
-    from models.surrogate.validate import validate_and_write
-
-    try:
-        lib = SurrogateLibrary.load(directory)
-    except ValueError as exc:
-        sys.stderr.write(f"fresh validation skipped: {exc}\n")
-        return
-    if not validate_and_write(lib, directory.parent)["targets_met"]:
-        sys.stderr.write("fresh validation: targets not met (VALIDATION.md names them)\n")
-
-
-def _worker_init_env() -> None:
-    # children inherit the environment: single-threaded BLAS in every worker
-    for var in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS"):
-        os.environ.setdefault(var, "1")
-
-
-if __name__ == "__main__":
-    raise SystemExit(main())

@@ -1,8 +1,8 @@
 """Reproducible fit of the statistical baseline on NASS-CDS 1997-2000.
 
-Run ``python -m models.baseline.fit`` (the service exposes it as
+Run ``python -m models.offline.baseline.fit`` (the service exposes it as
 ``aacn-triage baseline fit``). It reads the shipped CSV
-(``models/baseline/data/nass-cds-1997-2000.csv``, see ``PROVENANCE.md``) and
+(``models/offline/data/nass-cds-1997-2000.csv``, see ``PROVENANCE.md``) and
 writes ``models/baseline/artifacts/nass_logistic_v1.json``.
 
 Model
@@ -93,6 +93,7 @@ from models.baseline.logistic import (
     MODEL_VERSION,
     default_artifact_path,
 )
+from models.offline.paths import DATA_DIR
 
 __all__ = [
     "CV_FOLDS",
@@ -167,8 +168,8 @@ _TOL: Final[float] = 1e-12
 
 
 def default_data_path() -> Path:
-    """Path of the shipped training data, ``models/baseline/data/nass-cds-1997-2000.csv``."""
-    return Path(__file__).resolve().parent / "data" / "nass-cds-1997-2000.csv"
+    """Path of the shipped training data, ``models/offline/data/nass-cds-1997-2000.csv``."""
+    return DATA_DIR / "nass-cds-1997-2000.csv"
 
 
 @dataclass(frozen=True)
@@ -718,7 +719,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         Exit status (0 on success).
     """
     parser = argparse.ArgumentParser(
-        prog="python -m models.baseline.fit",
+        prog="python -m models.offline.baseline.fit",
         description="Fit the NASS-CDS logistic baseline and write its JSON artifact.",
     )
     parser.add_argument("--data", type=Path, default=default_data_path(), help="input CSV")

@@ -14,7 +14,7 @@ FE-MB database, section 3.2).
 
 Run::
 
-    python -m models.lpm.matrix [--out DIR]
+    python -m models.offline.lpm.matrix [--out DIR]
 
 Writes ``matrix.csv`` and ``matrix.png`` to ``DIR`` and prints the table.
 """

@@ -9,7 +9,7 @@ of ``log(simulated / target)^2`` (a failed run costs 100 per case).
 
 Run::
 
-    python -m models.lpm.calibrate --out DIR [--targets FILE.json]
+    python -m models.offline.lpm.calibrate --out DIR [--targets FILE.json]
         [--param KEY[=LO:HI] ...] [--seed 0] [--maxiter 30] [--popsize 6] [--resume]
 
 Writes ``DIR/state.npz`` (resume state), ``DIR/<name>.json`` (the fitted
@@ -240,7 +240,7 @@ def calibrate(
     fitted = base.with_values(
         dict(zip(keys, (float(v) for v in x), strict=True)),
         name=f"{base.name}_calibrated",
-        note=f"calibrated by models.lpm.calibrate (seed {seed})",
+        note=f"calibrated by models.offline.lpm.calibrate (seed {seed})",
     )
     (out / f"{fitted.name}.json").write_text(json.dumps(fitted.to_document(), indent=1) + "\n")
     lines = [

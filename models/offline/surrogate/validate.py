@@ -6,9 +6,9 @@ were chosen (the measurements in :data:`models.surrogate.spec.DELTA_V_PIECES_KMH
 so its figures carry some selection. This module draws a second, larger set
 from a seed that no build decision has seen (:data:`FRESH_SEED`), runs the
 direct LPM there and scores the library against it with the same measures as
-the build (:func:`models.surrogate.build.heldout_scores`), plus the ISS15+
+the build (:func:`models.offline.surrogate.runs.heldout_scores`), plus the ISS15+
 agreement at the service's own decision threshold
-(:func:`models.surrogate.report.service_raw_threshold`). With 600 points a
+(:func:`models.offline.surrogate.runs.service_raw_threshold`). With 600 points a
 family's median relative error has a sampling error of about 0.3 points
 (against about 0.5 with 150).
 
@@ -42,6 +42,7 @@ import numpy as np
 import numpy.typing as npt
 
 from models.impact_mode import ImpactMode
+from models.offline.paths import docs_dir
 from models.surrogate.evaluate import SurrogateFamily, SurrogateLibrary
 from models.surrogate.spec import (
     AGREEMENT_TARGET,
@@ -148,21 +149,20 @@ def _checksums() -> tuple[str, str]:
 def _run_digest(spec: FamilySpec) -> str:
     """What a family's LPM runs depend on besides the LPM code, the parameters
     and the points: the family's restraints and outputs, the engine version and
-    the pulse code (``models/surrogate/build.py``, ``models/pulse.py``)."""
+    the run and pulse code (``models/offline/surrogate/runs.py``, ``models/pulse.py``)."""
     import hashlib
     import json
 
-    from models import ENGINE_VERSION
+    from models import ENGINE_VERSION, pulse
+    from models.codehash import source_tree_sha256
+    from models.offline.surrogate import runs
 
-    root = Path(__file__).resolve().parents[1]
     blob = {
         "family": [spec.name, spec.mode.value, spec.body.value, spec.belted, spec.airbag_deployed],
         "outputs": list(spec.outputs),
         "engine": ENGINE_VERSION,
-        "code": [
-            hashlib.sha256((root / rel).read_bytes()).hexdigest()
-            for rel in ("surrogate/build.py", "pulse.py")
-        ],
+        # what the code does, not how it is written (models.codehash)
+        "code": source_tree_sha256([Path(runs.__file__), Path(pulse.__file__)]),
     }
     return hashlib.sha256(json.dumps(blob, sort_keys=True).encode()).hexdigest()
 
@@ -177,7 +177,7 @@ def fresh_runs(
     (FreshRuns, bool)
         The runs and whether they came from the cache.
     """
-    from models.surrogate.build import lpm_runs
+    from models.offline.surrogate.runs import lpm_runs
 
     code_sha, params_sha = _checksums()
     digest = _run_digest(spec)
@@ -222,7 +222,7 @@ def score_family(
     Returns
     -------
     dict
-        :func:`models.surrogate.build.heldout_scores` (``n``, per measure the
+        :func:`models.offline.surrogate.runs.heldout_scores` (``n``, per measure the
         median and 90th percentile relative error, ``decision_agreement_p``,
         ...), ``decision_agreement_service`` (P on both sides of the service's
         uncorrected threshold for the family) and ``worst_measure`` /
@@ -234,8 +234,7 @@ def score_family(
         values, each bin including its lower bound; None for an empty bin,
         which ties can make).
     """
-    from models.surrogate.build import heldout_scores, relative_error
-    from models.surrogate.report import service_raw_threshold
+    from models.offline.surrogate.runs import heldout_scores, relative_error, service_raw_threshold
 
     if pred is None:
         pred = fam.predict(runs.x)
@@ -280,8 +279,8 @@ def _pooled(
     runs: Mapping[str, FreshRuns],
     preds: Mapping[str, FloatArray],
 ) -> dict[str, float]:
-    from models.surrogate.build import ISS15_DECISION_PROBABILITY as thr
-    from models.surrogate.build import relative_error
+    from models.offline.surrogate.runs import ISS15_DECISION_PROBABILITY as thr
+    from models.offline.surrogate.runs import relative_error
 
     rel: dict[str, list[float]] = {}
     agree: list[bool] = []
@@ -326,8 +325,8 @@ def validate_library(
     progress : callable, optional
         Called with one line per family.
     coverage_cases : int, optional
-        Fresh cases of the interval checks (:func:`models.surrogate.report.coverage_check`
-        for P(ISS >= 15), :func:`~models.surrogate.report.measure_coverage_check` for
+        Fresh cases of the interval checks (:func:`models.offline.surrogate.coverage.coverage_check`
+        for P(ISS >= 15), :func:`~models.offline.surrogate.coverage.measure_coverage_check` for
         the measures and ISS), drawn from the validated families with `seed`; 0
         skips them. Not cached (about 0.5 s a case).
 
@@ -377,7 +376,7 @@ def validate_library(
     pooled = _pooled(specs, runs, preds)
     coverage: dict[str, Any] | None = None
     if coverage_cases > 0:
-        from models.surrogate.report import coverage_check, measure_coverage_check
+        from models.offline.surrogate.coverage import coverage_check, measure_coverage_check
 
         if progress is not None:
             progress(f"interval checks on {coverage_cases} fresh cases ...")
@@ -491,7 +490,7 @@ def write_validation(result: Mapping[str, Any], out_dir: Path) -> Path:
     out_dir.mkdir(parents=True, exist_ok=True)
     write_json(out_dir / "validation.json", result)
     _plot(result, out_dir / "validation.png")
-    from models.surrogate.build import ISS15_DECISION_PROBABILITY, default_config
+    from models.offline.surrogate.build import ISS15_DECISION_PROBABILITY, default_config
     from models.triage import LPM_THRESHOLDS
 
     thresholds = ", ".join(f"{m.value} {t:g}" for m, t in LPM_THRESHOLDS.items())
@@ -630,9 +629,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         "--family", action="append", default=None, help="only this family (repeatable; with --out)"
     )
     ap.add_argument("--artifacts", type=Path, default=None, help="artifact directory (shipped)")
-    ap.add_argument(
-        "--out", type=Path, default=None, help="report directory (the artifacts' parent)"
-    )
+    ap.add_argument("--out", type=Path, default=None, help="report directory (docs/surrogate)")
     ap.add_argument("--no-cache", action="store_true", help="rerun every LPM case")
     ap.add_argument(
         "--coverage-cases",
@@ -667,7 +664,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         sys.stderr.write(f"{', '.join(non_default)} {verb} --out DIR (not the shipped report)\n")
         return 2
     art: Path = args.artifacts or default_artifact_dir()
-    out: Path = args.out or art.parent
+    out: Path = args.out or docs_dir("surrogate")
     try:
         lib = SurrogateLibrary.load(art, require_all=args.family is None)
     except ValueError as exc:

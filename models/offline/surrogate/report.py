@@ -9,9 +9,8 @@ Figure-8-like plot of P(ISS >= 15) against delta-V with its bootstrap band.
 
 from __future__ import annotations
 
-import dataclasses
 import json
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any, Final
 
@@ -19,12 +18,24 @@ import numpy as np
 import numpy.typing as npt
 
 from models.impact_mode import ImpactMode
+from models.offline.surrogate.coverage import (
+    COVERAGE_SEED,
+    MEASURE_DRAWS,
+    coverage_check,
+    measure_coverage_check,
+)
+from models.offline.surrogate.runs import (
+    heldout_scores,
+    lpm_outputs,
+    relative_error,
+    service_raw_threshold,
+)
+from models.offline.surrogate.validate import FRESH_N
 from models.surrogate.evaluate import (
     EVALUATION_VERSION,
     N_SENSOR_SAMPLES,
     SurrogateFamily,
     SurrogateLibrary,
-    UncertaintyResult,
 )
 from models.surrogate.spec import (
     AGREEMENT_TARGET,
@@ -32,9 +43,7 @@ from models.surrogate.spec import (
     HEAD_CLEARANCE,
     LOGIT_CLIP,
     MEDIAN_ERROR_TARGET,
-    P_RESOLUTION,
 )
-from models.surrogate.validate import FRESH_N
 
 __all__ = [
     "COVERAGE_SEED",
@@ -47,8 +56,6 @@ __all__ = [
 
 FloatArray = npt.NDArray[np.float64]
 
-#: Seed of the coverage cases drawn by :func:`coverage_check`.
-COVERAGE_SEED = 5
 
 #: Nominal crash of the table's standard deviations: delta-V (km/h), |angle|
 #: (deg), posture (deg, neutral 5.8), seat track (mm), duration (ms).
@@ -75,153 +82,6 @@ def _sd_under_sensor_error(fam: SurrogateFamily) -> dict[str, float]:
     x[:, 3] = np.clip(x[:, 3] + DEFAULT_SEAT_TRACK_SD_MM * _NORMALS[:, 1], -120.0, 120.0)
     y = fam.predict(x)
     return {o: float(np.std(y[:, k])) for k, o in enumerate(fam.outputs)}
-
-
-def _random_case(
-    families: Mapping[str, SurrogateFamily], names: Sequence[str], rng: np.random.Generator
-) -> tuple[str, FloatArray, FloatArray, FloatArray, UncertaintyResult]:
-    """A random family of `names` and uniform in-domain readings, with the served answer.
-
-    Returns the family name, the domain's lower and upper bounds, the readings
-    (shape (5,)) and the :class:`UncertaintyResult` at them.
-    """
-    name = names[int(rng.integers(len(names)))]
-    fam = families[name]
-    lo = np.array([r[0] for r in fam.ranges])
-    hi = np.array([r[1] for r in fam.ranges])
-    x0 = lo + (hi - lo) * rng.random(lo.size)
-    r = fam.propagate(
-        delta_v_kmh=float(x0[0]),
-        angle_deg=float(x0[1]),
-        posture_deg=float(x0[2]),
-        seat_track_mm=float(x0[3]),
-        duration_ms=float(x0[4]),
-    )
-    return name, lo, hi, x0, r
-
-
-def coverage_check(
-    lib: SurrogateLibrary,
-    n_cases: int,
-    seed: int = COVERAGE_SEED,
-    families: Sequence[str] | None = None,
-) -> list[dict[str, Any]]:
-    """Does the 95% interval of P(ISS >= 15) contain the Monte Carlo value?
-
-    Cases: random families and random in-domain readings (seeded); the known
-    input distribution is the default Gaussian sensor error around the
-    readings (clipped to the domain). The Monte Carlo value is the mean
-    P(ISS >= 15) of direct LPM runs at the fixed sensor sample points; it counts
-    as inside when within :data:`P_RESOLUTION` of the interval.
-
-    Parameters
-    ----------
-    lib : SurrogateLibrary
-    n_cases, seed : int
-    families : sequence of str, optional
-        Draw the cases from these families only (default: every family of `lib`).
-
-    Returns
-    -------
-    list of dict
-        One row per case: family, inputs, interval, Monte Carlo value, hit.
-    """
-    from models.surrogate.build import lpm_outputs
-    from models.surrogate.evaluate import (
-        _NORMALS,
-        DEFAULT_POSTURE_SD_DEG,
-        DEFAULT_SEAT_TRACK_SD_MM,
-    )
-
-    specs = {s.name: s for s in FAMILIES}
-    names = [n for n in lib.family_names if n in specs and (families is None or n in families)]
-    rng = np.random.default_rng(seed)
-    rows: list[dict[str, Any]] = []
-    for _ in range(n_cases):
-        name, lo, hi, x0, r = _random_case(lib.families(), names, rng)
-        x = np.tile(x0, (_NORMALS.shape[0], 1))
-        x[:, 2] = np.clip(x0[2] + DEFAULT_POSTURE_SD_DEG * _NORMALS[:, 0], lo[2], hi[2])
-        x[:, 3] = np.clip(x0[3] + DEFAULT_SEAT_TRACK_SD_MM * _NORMALS[:, 1], lo[3], hi[3])
-        y, _ = lpm_outputs(specs[name], x)
-        mc = float(np.nanmean(y[:, specs[name].outputs.index("p_iss15")]))
-        rows.append(
-            {
-                "family": name,
-                "x": [round(float(v), 1) for v in x0],
-                "p": r.p_iss15,
-                "ci95": r.p_iss15_ci95,
-                "mc": mc,
-                "hit": bool(
-                    r.p_iss15_ci95[0] - P_RESOLUTION <= mc <= r.p_iss15_ci95[1] + P_RESOLUTION
-                ),
-            }
-        )
-    return rows
-
-
-#: Direct LPM draws of the true sensor values per case in :func:`measure_coverage_check`.
-MEASURE_DRAWS = 48
-#: A measure outcome counts as inside when within this relative tolerance of
-#: the interval (the surrogate and the check are both double precision; the
-#: tolerance only absorbs rounding at an interval that is a single value).
-_REL_TOL = 1e-3
-
-
-def measure_coverage_check(
-    families: Mapping[str, SurrogateFamily],
-    n_cases: int,
-    seed: int = COVERAGE_SEED,
-    n_draws: int = MEASURE_DRAWS,
-) -> dict[str, list[float]]:
-    """Share of direct LPM outcomes inside the served 95% interval of each measure and ISS.
-
-    Cases: random families and random in-domain readings (seeded). For each,
-    `n_draws` true sensor values are drawn independently (seeded Gaussian
-    draws, not the service's fixed sample set) from the default sensor error
-    around the readings, clipped to the domain; the LPM is run at each, and
-    the share of its outcomes inside the interval the service would give for
-    those readings is recorded. For honest 95% intervals the shares average
-    about 0.95 or more.
-
-    Parameters
-    ----------
-    families : Mapping[str, SurrogateFamily]
-        The families to draw from (``SurrogateLibrary.families()``, or the
-        same families without their held-out margin, :func:`bare_families`).
-    n_cases, seed, n_draws : int
-
-    Returns
-    -------
-    dict
-        Output name (measures and ``iss``) -> one share per case that computes it.
-    """
-    from models.surrogate.build import lpm_outputs
-    from models.surrogate.evaluate import DEFAULT_POSTURE_SD_DEG, DEFAULT_SEAT_TRACK_SD_MM
-
-    specs = {s.name: s for s in FAMILIES}
-    names = sorted(n for n in families if n in specs)
-    rng = np.random.default_rng(seed)
-    shares: dict[str, list[float]] = {}
-    for _ in range(n_cases):
-        name, lo, hi, x0, r = _random_case(families, names, rng)
-        x = np.tile(x0, (n_draws, 1))
-        x[:, 2] = np.clip(
-            x0[2] + DEFAULT_POSTURE_SD_DEG * rng.standard_normal(n_draws), lo[2], hi[2]
-        )
-        x[:, 3] = np.clip(
-            x0[3] + DEFAULT_SEAT_TRACK_SD_MM * rng.standard_normal(n_draws), lo[3], hi[3]
-        )
-        y, _ = lpm_outputs(specs[name], x)
-        for k, out in enumerate(specs[name].outputs):
-            if out == "p_iss15":
-                continue
-            a, b = r.iss_ci95 if out == "iss" else r.measures_ci95[out]
-            v = y[:, k][np.isfinite(y[:, k])]
-            if v.size == 0:
-                continue
-            tol = _REL_TOL * max(abs(a), abs(b), 1e-12)
-            shares.setdefault(out, []).append(float(np.mean((v >= a - tol) & (v <= b + tol))))
-    return shares
 
 
 def bare_families(artifact_dir: Path) -> dict[str, SurrogateFamily]:
@@ -654,7 +514,6 @@ _KRIGING_TABLE_MEASURES: Final[tuple[str, ...]] = (
 
 def _kriging_table(artifact_dir: Path, fams: list[SurrogateFamily]) -> list[str]:
     """Table F: held-out errors of the PCEs alone and with the Kriging of their residuals."""
-    from models.surrogate.build import heldout_scores
 
     rows = []
     for fam in fams:
@@ -700,7 +559,6 @@ BAND_CHECK_DELTA_V_KMH = (10.0, 25.0, 40.0, 55.0, 70.0, 85.0, 100.0, 115.0)
 
 def _lpm_band_points(fam: SurrogateFamily) -> tuple[list[float], list[float]]:
     """Mean LPM P(ISS >= 15) over the sensor samples at the band plot's nominal inputs."""
-    from models.surrogate.build import lpm_outputs
     from models.surrogate.evaluate import (
         _NORMALS,
         DEFAULT_POSTURE_SD_DEG,
@@ -729,7 +587,6 @@ def heldout_metrics(artifact_dir: Path, fam: SurrogateFamily) -> dict[str, Any]:
     such as P(ISS >= 15) from the measures (evaluation version 3), shows
     without a rebuild.
     """
-    from models.surrogate.build import heldout_scores
 
     spec = next(s for s in FAMILIES if s.name == fam.name)
     xh, yh = _heldout(artifact_dir, fam)
@@ -761,30 +618,7 @@ def _agreement_misses(fams: list[SurrogateFamily], held: Mapping[str, Mapping[st
     return "; ".join(out) if out else "none"
 
 
-def service_raw_threshold(family_name: str, outputs: Sequence[str]) -> float:
-    """The service's decision threshold for a family, on the uncorrected P(ISS >= 15).
-
-    The service decides on (P - P0) / (1 - P0) >= t (``models.risk_calibration``,
-    ``models.triage.LPM_THRESHOLDS``), i.e. on P >= P0 + t (1 - P0), with P0 the
-    zero-load probability of the family's body, mode and measures (default age,
-    as the surrogates are built).
-    """
-    from models.injury.assessment import InjuryMeasures
-    from models.notification import Body
-    from models.risk_calibration import zero_load_probability
-    from models.triage import LPM_THRESHOLDS  # the service's decision thresholds
-
-    mode_name, body_name = family_name.split("__")[:2]
-    mode = ImpactMode(mode_name)
-    fields = {f.name for f in dataclasses.fields(InjuryMeasures)}
-    present = InjuryMeasures(**dict.fromkeys((o for o in outputs if o in fields), 0.0))
-    p0 = zero_load_probability(present, Body(body_name), None, mode)
-    t = LPM_THRESHOLDS[mode]
-    return p0 + t * (1.0 - p0)
-
-
 def _pooled(artifact_dir: Path, fams: list[SurrogateFamily]) -> dict[str, str]:
-    from models.surrogate.build import relative_error
 
     rel: dict[str, list[float]] = {}
     agree: list[bool] = []

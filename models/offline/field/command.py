@@ -1,0 +1,40 @@
+"""``aacn-triage fit-field``: fit the field model, write its artifact and its model card.
+
+The orchestration of :mod:`.fit` (the fit and its cross-validation) and
+:mod:`.report` (the model card); neither imports this module.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+
+from models.offline.field.fit import FitConfig, fit_field, write_artifact
+from models.offline.field.report import default_report_dir, write_model_card
+
+__all__ = ["main"]
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``aacn-triage fit-field``: fit, write the artifact and the model card."""
+    parser = argparse.ArgumentParser(
+        prog="aacn-triage fit-field", description=__doc__.split("\n")[0]
+    )
+    parser.add_argument(
+        "--out", type=Path, default=None, help="report directory (default docs/field)"
+    )
+    parser.add_argument(
+        "--artifact", type=Path, default=None, help="artifact path (default: shipped)"
+    )
+    parser.add_argument("--cache", type=Path, default=None, help="engine-run cache directory")
+    parser.add_argument("--workers", type=int, default=None, help="processes (default CPU count)")
+    parser.add_argument("--quick", action="store_true", help="few repeats and refits (a smoke run)")
+    args = parser.parse_args(argv)
+    cfg = FitConfig(n_repeats=2, n_bootstrap=20, n_metric_bootstrap=200) if args.quick else None
+    fit = fit_field(cfg, cache_dir=args.cache, workers=args.workers)
+    path = write_artifact(fit.artifact, args.artifact)
+    card = write_model_card(fit, args.out or default_report_dir())
+    sys.stderr.write(f"artifact: {path}\nmodel card: {card}\n")
+    return 0

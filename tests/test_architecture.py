@@ -1,0 +1,174 @@
+"""The house: one-way imports, no cycles, a request path without the offline tools.
+
+The import graph is read from the source (every ``import`` and ``from ...
+import``, at module level or inside functions, so an import hidden in a
+function counts). Rules: the engine (``models``) never imports the service;
+the engine never imports the offline tools (``models.offline``); nothing in
+the house imports in a circle. And, run for real in a fresh interpreter: the
+service's request path (the app, the engine models loaded, one notification
+triaged) imports no offline module and none of their heavy libraries.
+"""
+
+from __future__ import annotations
+
+import ast
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+PACKAGES = ("models", "service")
+
+
+def _module_name(path: Path) -> str:
+    rel = path.relative_to(ROOT).with_suffix("")
+    parts = list(rel.parts)
+    if parts[-1] == "__init__":
+        parts.pop()
+    return ".".join(parts)
+
+
+def _modules() -> dict[str, Path]:
+    out = {}
+    for pkg in PACKAGES:
+        for path in (ROOT / pkg).rglob("*.py"):
+            if "versions" in path.parts:
+                continue
+            out[_module_name(path)] = path
+    return out
+
+
+def _resolve(name: str, known: dict[str, Path]) -> str | None:
+    """The house module an imported name refers to (a module, or its package)."""
+    while name:
+        if name in known:
+            return name
+        name = name.rpartition(".")[0]
+    return None
+
+
+def import_graph() -> dict[str, set[str]]:
+    known = _modules()
+    graph: dict[str, set[str]] = {m: set() for m in known}
+    for module, path in known.items():
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        package = module if path.name == "__init__.py" else module.rpartition(".")[0]
+        for node in ast.walk(tree):
+            targets: list[str] = []
+            if isinstance(node, ast.Import):
+                targets = [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom):
+                base = node.module or ""
+                if node.level:
+                    up = package.split(".")
+                    up = up[: len(up) - (node.level - 1)]
+                    base = ".".join([*up, base] if base else up)
+                # `from pkg import sub` imports the submodule; `from mod import name`
+                # imports the module (a name of a package __init__ is an edge to it)
+                targets = [
+                    f"{base}.{a.name}" if f"{base}.{a.name}" in known else base for a in node.names
+                ]
+            for t in targets:
+                hit = _resolve(t, known)
+                if hit is not None and hit != module:
+                    graph[module].add(hit)
+    return graph
+
+
+def _is_offline(module: str) -> bool:
+    return module == "models.offline" or module.startswith("models.offline.")
+
+
+def test_the_engine_never_imports_the_service() -> None:
+    bad = {
+        (m, d)
+        for m, deps in import_graph().items()
+        if m.startswith("models")
+        for d in deps
+        if d.startswith("service")
+    }
+    assert not bad
+
+
+def test_the_engine_never_imports_the_offline_tools() -> None:
+    bad = {
+        (m, d)
+        for m, deps in import_graph().items()
+        if m.startswith("models") and not _is_offline(m)
+        for d in deps
+        if _is_offline(d)
+    }
+    assert not bad, sorted(bad)
+
+
+def test_no_module_of_the_house_imports_in_a_circle() -> None:
+    graph = import_graph()
+    # a package's __init__ importing its own submodules is not a cycle of the house;
+    # edges to a parent package (a module importing from its package) are kept
+    state: dict[str, int] = {}
+    cycles: list[list[str]] = []
+
+    def visit(node: str, stack: list[str]) -> None:
+        state[node] = 1
+        stack.append(node)
+        for dep in sorted(graph[node]):
+            if state.get(dep) == 1:
+                cycles.append(stack[stack.index(dep) :] + [dep])
+            elif dep not in state:
+                visit(dep, stack)
+        stack.pop()
+        state[node] = 2
+
+    for node in sorted(graph):
+        if node not in state:
+            visit(node, [])
+    assert not cycles, cycles[:5]
+
+
+def test_the_graph_sees_imports_hidden_in_functions() -> None:
+    """The check can fail: a function-level import is an edge like any other."""
+    graph = import_graph()
+    # service.cli imports the evaluation only inside the `evaluate` command
+    assert "models.offline.field.evaluate" in graph["service.cli"]
+    assert "models.triage" in graph["service.cases_service"]
+
+
+_REQUEST_PATH = """
+import json, sys
+from datetime import UTC, datetime
+from fastapi.testclient import TestClient
+from service.app import create_app
+from service.settings import Settings
+from service.auth import Role, create_api_key
+from service.schemas import EXAMPLE_NOTIFICATIONS
+
+app = create_app(Settings(database_url="sqlite:///" + sys.argv[1]))
+with TestClient(app) as client:
+    _, key = create_api_key(app.state.ctx.sessions, name="c", role=Role.SUBMITTER)
+    body = EXAMPLE_NOTIFICATIONS["summary"]["value"]
+    r = client.post("/v1/cases", json=body, headers={"Authorization": "Bearer " + key})
+    assert r.status_code == 201, r.text
+    assert client.get("/readyz").status_code == 200
+print(json.dumps(sorted(sys.modules)))
+"""
+
+#: Libraries only the offline tools need (the ``offline`` extra).
+OFFLINE_LIBRARIES = ("matplotlib", "sklearn", "statsmodels", "chaospy", "pandas")
+
+
+def test_the_request_path_imports_no_offline_tool(tmp_path: Path) -> None:
+    out = subprocess.run(
+        [sys.executable, "-c", _REQUEST_PATH, str(tmp_path / "a.db")],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        check=True,
+        timeout=600,
+    )
+    loaded = json.loads(out.stdout.strip().splitlines()[-1])
+    offline = [m for m in loaded if _is_offline(m)]
+    heavy = [m for m in loaded if m.split(".")[0] in OFFLINE_LIBRARIES]
+    assert not offline, offline
+    assert not heavy, sorted({m.split(".")[0] for m in heavy})
+    assert "models.triage" in loaded, "the check ran the engine"
