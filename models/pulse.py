@@ -64,10 +64,21 @@ import numpy as np
 import numpy.typing as npt
 from scipy.optimize import least_squares
 
-from models.injury.filters import SAE_J211_DESIGN_FACTOR, cfc_filter
+from models.constants import G_MS2
+from models.injury.filters import cfc_filter
+from models.limits import (
+    MAX_ABS_ACCELERATION_G,
+    MAX_DELTA_V_KMH,
+    MAX_EDR_INTERVAL_MS,
+    MAX_RECORD_DURATION_MS,
+    MIN_ACCELERATION_SAMPLE_RATE_HZ,
+    MIN_SAMPLES,
+    PULSE_CFC,
+)
 from models.notification import AccelerationPulse, DeltaVPulse, Pulse, SummaryPulse
 
 __all__ = [
+    "PulseError",
     "DEFAULT_HAVERSINE_DURATION_MS",
     "DEFAULT_OUTPUT_RATE_HZ",
     "EOE_DELTA_V_KMH",
@@ -86,6 +97,7 @@ __all__ = [
     "HaversineFit",
     "ProcessedPulse",
     "haversine",
+    "haversine_amplitude_g",
     "haversine_delta_v_kmh",
     "pdof_from_delta_v",
     "process_pulse",
@@ -93,15 +105,20 @@ __all__ = [
 
 FloatArray = npt.NDArray[np.float64]
 
+
+class PulseError(ValueError):
+    """A pulse the engine cannot use, with the reason naming the field.
+
+    An input problem (the answer is a 422 naming ``crash.pulse``), unlike any
+    other exception of the engine, which is a failure of the engine itself.
+    """
+
+
 #: Standard acceleration of gravity, m/s^2 (CGPM 1901; ISO 80000-3).
-STANDARD_GRAVITY: Final[float] = 9.80665
+STANDARD_GRAVITY: Final[float] = G_MS2
 
 #: km/h per m/s (exact: 3600 s/h / 1000 m/km).
 KMH_PER_MPS: Final[float] = 3.6
-
-#: Channel frequency class of vehicle crash pulses (SAE J211-1 table;
-#: ``injury-criteria.md`` section 4; ``occupant-lpm-notes.md`` section 3).
-PULSE_CFC: Final[int] = 60
 
 #: 49 CFR 563.5 definitions: "time zero" and "end of event" use the resultant
 #: cumulative delta-V within a 20 ms period (``crash-data-and-triage.md`` 2.5) [V].
@@ -128,28 +145,8 @@ MIN_OUTPUT_RATE_HZ: Final[float] = 1_000.0
 #: Highest output rate, Hz. [R] Guards memory: 5 s at 100 kHz is 500k samples.
 MAX_OUTPUT_RATE_HZ: Final[float] = 100_000.0
 
-#: Lowest sampling rate of an acceleration pulse, Hz: the CFC 60 design
-#: frequency (60 * 2.0775 Hz, SAE J211-1) must be below the Nyquist frequency.
-MIN_ACCELERATION_SAMPLE_RATE_HZ: Final[float] = 2.0 * PULSE_CFC * SAE_J211_DESIGN_FACTOR
-
-#: Longest record accepted, s. [R] 49 CFR 563 treats two events within 5 s as
-#: one multi-event crash; a single pulse record is 250-300 ms (Table I).
-MAX_RECORD_DURATION_S: Final[float] = 5.0
-
-#: Largest plausible delta-V, km/h (issue 2: "delta-V above 200 km/h" is refused).
-MAX_DELTA_V_KMH: Final[float] = 200.0
-
-#: Largest acceleration magnitude accepted in a record, g. [R] Far above any
-#: vehicle crash pulse (haversine peaks 10-60 g, ``occupant-lpm-notes.md``
-#: section 3; 563's older acceleration range +/-50 g); guards against overflow.
-MAX_ABS_ACCELERATION_G: Final[float] = 2_000.0
-
-#: Longest sampling interval of a delta-V record, ms: one 563 window (20 ms);
-#: Part 563 Table I records at 10 ms.
-MAX_EDR_INTERVAL_MS: Final[float] = 1_000.0 * EOE_WINDOW_S
-
-#: Fewest samples in a measured record (two intervals).
-MIN_SAMPLES: Final[int] = 3
+#: Longest record accepted, s (:data:`models.limits.MAX_RECORD_DURATION_MS`).
+MAX_RECORD_DURATION_S: Final[float] = MAX_RECORD_DURATION_MS / 1_000.0
 
 #: Relative size of the total sum of squares below which a resultant counts as
 #: constant (r^2 is then reported as 0).
@@ -282,6 +279,28 @@ def haversine(time_s: npt.ArrayLike, amplitude_g: float, duration_s: float) -> F
     return np.where(inside, out, 0.0)
 
 
+def haversine_amplitude_g(delta_v_kmh: float, duration_s: float) -> float:
+    """Peak of the haversine pulse of a delta-V, ``A = 2 delta-V / (g T)``, in g.
+
+    The one home of this formula (the summary pulse, the surrogates' design runs,
+    the test pulses): the operation order is fixed, so every caller gets the
+    same bits.
+
+    Parameters
+    ----------
+    delta_v_kmh : float
+        Velocity change, km/h.
+    duration_s : float
+        Duration ``T``, s; positive.
+
+    Returns
+    -------
+    float
+        ``A``, g.
+    """
+    return 2.0 * (delta_v_kmh / KMH_PER_MPS) / (STANDARD_GRAVITY * duration_s)
+
+
 def haversine_delta_v_kmh(amplitude_g: float, duration_s: float) -> float:
     """Delta-V of a haversine pulse, ``A g T / 2``, in km/h.
 
@@ -326,10 +345,10 @@ def pdof_from_delta_v(delta_v_longitudinal: float, delta_v_lateral: float) -> fl
 def _number(name: str, value: object) -> float:
     """`value` as a finite float, else ValueError naming `name`."""
     if isinstance(value, bool) or not isinstance(value, int | float | np.floating | np.integer):
-        raise ValueError(f"`{name}` must be a number, got {type(value).__name__}.")
+        raise PulseError(f"`{name}` must be a number, got {type(value).__name__}.")
     x = float(value)
     if not math.isfinite(x):
-        raise ValueError(f"`{name}` must be finite, got {x!r}.")
+        raise PulseError(f"`{name}` must be finite, got {x!r}.")
     return x
 
 
@@ -338,17 +357,17 @@ def _series(name: str, values: object, limit: float) -> FloatArray:
     try:
         arr = np.asarray(values, dtype=np.float64)
     except (TypeError, ValueError) as exc:
-        raise ValueError(f"`{name}` must be a sequence of numbers.") from exc
+        raise PulseError(f"`{name}` must be a sequence of numbers.") from exc
     if arr.ndim != 1:
-        raise ValueError(f"`{name}` must be one-dimensional, got shape {arr.shape}.")
+        raise PulseError(f"`{name}` must be one-dimensional, got shape {arr.shape}.")
     if arr.size < MIN_SAMPLES:
-        raise ValueError(f"`{name}` is too short: {arr.size} samples, need at least {MIN_SAMPLES}.")
+        raise PulseError(f"`{name}` is too short: {arr.size} samples, need at least {MIN_SAMPLES}.")
     if not np.all(np.isfinite(arr)):
         bad = int(np.flatnonzero(~np.isfinite(arr))[0])
-        raise ValueError(f"`{name}` must be finite; element {bad} is {arr[bad]!r}.")
+        raise PulseError(f"`{name}` must be finite; element {bad} is {arr[bad]!r}.")
     if np.any(np.abs(arr) > limit):
         bad = int(np.flatnonzero(np.abs(arr) > limit)[0])
-        raise ValueError(
+        raise PulseError(
             f"`{name}` element {bad} is {arr[bad]:.4g}, beyond the plausible range +/-{limit:g}."
         )
     return arr
@@ -358,12 +377,12 @@ def _check_record_duration(name: str, n: int, step_s: float) -> float:
     """Record length ``(n - 1) * step_s`` in s, checked against the limits."""
     length = (n - 1) * step_s
     if length < EOE_WINDOW_S * (1.0 - _GRID_EPS):
-        raise ValueError(
+        raise PulseError(
             f"`{name}` is too short: the record spans {length * 1e3:g} ms, need at least "
             f"{EOE_WINDOW_S * 1e3:g} ms (one 49 CFR 563 window)."
         )
     if length > MAX_RECORD_DURATION_S:
-        raise ValueError(
+        raise PulseError(
             f"`{name}` is too long: the record spans {length:g} s, at most "
             f"{MAX_RECORD_DURATION_S:g} s is accepted."
         )
@@ -448,7 +467,7 @@ def _readonly(a: FloatArray) -> FloatArray:
 
 def _check_delta_v(name: str, dv_kmh: float) -> None:
     if dv_kmh > MAX_DELTA_V_KMH:
-        raise ValueError(
+        raise PulseError(
             f"`{name}` gives a delta-V of {dv_kmh:.4g} km/h, above the plausible maximum "
             f"{MAX_DELTA_V_KMH:g} km/h."
         )
@@ -465,10 +484,10 @@ def _summarise(
 ) -> ProcessedPulse:
     """Common tail for measured pulses: end of event, delta-V, PDOF, peak, fit."""
     if not (np.all(np.isfinite(dvx_kmh)) and np.all(np.isfinite(dvy_kmh))):
-        raise ValueError(f"`{name}` values are too large: the delta-V is not finite.")
+        raise PulseError(f"`{name}` values are too large: the delta-V is not finite.")
     end = _end_of_event_index(dvx_kmh, dvy_kmh, rate_hz)
     if end is None:
-        raise ValueError(
+        raise PulseError(
             f"`{name}` holds no crash pulse: the cumulative delta-V never changes by more "
             f"than {EOE_DELTA_V_KMH} km/h within {EOE_WINDOW_S * 1e3:g} ms "
             "(49 CFR 563.5 time zero)."
@@ -499,14 +518,14 @@ def _summarise(
 def _process_acceleration(pulse: AccelerationPulse, rate_hz: float) -> ProcessedPulse:
     fs = _number("sample_rate_hz", pulse.sample_rate_hz)
     if fs <= MIN_ACCELERATION_SAMPLE_RATE_HZ:
-        raise ValueError(
+        raise PulseError(
             f"`sample_rate_hz` must exceed {MIN_ACCELERATION_SAMPLE_RATE_HZ:g} Hz (twice the "
             f"CFC {PULSE_CFC} design frequency), got {fs:g}."
         )
     ax_raw = _series("longitudinal_g", pulse.longitudinal_g, MAX_ABS_ACCELERATION_G)
     ay_raw = _series("lateral_g", pulse.lateral_g, MAX_ABS_ACCELERATION_G)
     if ax_raw.size != ay_raw.size:
-        raise ValueError(
+        raise PulseError(
             f"`lateral_g` has {ay_raw.size} samples but `longitudinal_g` has {ax_raw.size}; "
             "they must be the same length."
         )
@@ -526,16 +545,16 @@ def _process_acceleration(pulse: AccelerationPulse, rate_hz: float) -> Processed
 def _process_delta_v(pulse: DeltaVPulse, rate_hz: float) -> ProcessedPulse:
     interval_ms = _number("interval_ms", pulse.interval_ms)
     if interval_ms <= 0.0:
-        raise ValueError(f"`interval_ms` must be positive, got {interval_ms:g}.")
+        raise PulseError(f"`interval_ms` must be positive, got {interval_ms:g}.")
     if interval_ms > MAX_EDR_INTERVAL_MS:
-        raise ValueError(
+        raise PulseError(
             f"`interval_ms` must be at most {MAX_EDR_INTERVAL_MS:g} ms (one 49 CFR 563 "
             f"window), got {interval_ms:g}."
         )
     vx = _series("longitudinal_kmh", pulse.longitudinal_kmh, MAX_DELTA_V_KMH)
     vy = _series("lateral_kmh", pulse.lateral_kmh, MAX_DELTA_V_KMH)
     if vx.size != vy.size:
-        raise ValueError(
+        raise PulseError(
             f"`lateral_kmh` has {vy.size} samples but `longitudinal_kmh` has {vx.size}; "
             "they must be the same length."
         )
@@ -556,7 +575,7 @@ def _process_delta_v(pulse: DeltaVPulse, rate_hz: float) -> ProcessedPulse:
 def _process_summary(pulse: SummaryPulse, rate_hz: float) -> ProcessedPulse:
     dv = _number("delta_v_kmh", pulse.delta_v_kmh)
     if dv <= 0.0:
-        raise ValueError(f"`delta_v_kmh` must be positive, got {dv:g}.")
+        raise PulseError(f"`delta_v_kmh` must be positive, got {dv:g}.")
     _check_delta_v("delta_v_kmh", dv)
     pdof = _number("pdof_deg", pulse.pdof_deg) % 360.0
     pdof = 0.0 if pdof >= 360.0 else pdof
@@ -565,12 +584,12 @@ def _process_summary(pulse: SummaryPulse, rate_hz: float) -> ProcessedPulse:
     else:
         dur_ms = _number("duration_ms", pulse.duration_ms)
         if dur_ms < EOE_WINDOW_S * 1e3 or dur_ms > MAX_RECORD_DURATION_S * 1e3:
-            raise ValueError(
+            raise PulseError(
                 f"`duration_ms` must be between {EOE_WINDOW_S * 1e3:g} and "
                 f"{MAX_RECORD_DURATION_S * 1e3:g} ms, got {dur_ms:g}."
             )
     dur_s = dur_ms / 1e3
-    amp = 2.0 * (dv / KMH_PER_MPS) / (STANDARD_GRAVITY * dur_s)
+    amp = haversine_amplitude_g(dv, dur_s)
     t = _grid(dur_s, rate_hz)
     a = haversine(t, amp, dur_s)
     rad = math.radians(pdof)
@@ -629,7 +648,7 @@ def process_pulse(pulse: Pulse, output_rate_hz: float = DEFAULT_OUTPUT_RATE_HZ) 
     """
     rate = _number("output_rate_hz", output_rate_hz)
     if not MIN_OUTPUT_RATE_HZ <= rate <= MAX_OUTPUT_RATE_HZ:
-        raise ValueError(
+        raise PulseError(
             f"`output_rate_hz` must be between {MIN_OUTPUT_RATE_HZ:g} and "
             f"{MAX_OUTPUT_RATE_HZ:g} Hz, got {rate:g}."
         )

@@ -23,6 +23,7 @@ import dataclasses
 import math
 from typing import Final
 
+from models.assumptions import Assumption, AssumptionCode
 from models.lpm.domain import POSTURE_RANGE_DEG, SEAT_TRACK_RANGE_MM
 from models.notification import NEUTRAL_LUMBAR_FLEXION_DEG, Occupant, SeatTrackSource
 
@@ -73,7 +74,9 @@ def seat_track_range_mm(source: SeatTrackSource) -> tuple[float, float]:
     raise ValueError(f"seat track source {source.value!r} is a reading, not a range")
 
 
-def resolve_sensor_evidence(occupant: Occupant, index: int, assumptions: list[str]) -> Occupant:
+def resolve_sensor_evidence(
+    occupant: Occupant, index: int, assumptions: list[Assumption]
+) -> Occupant:
     """The occupant with a posture and seat track reading and SD for every kind of evidence.
 
     Parameters
@@ -81,7 +84,7 @@ def resolve_sensor_evidence(occupant: Occupant, index: int, assumptions: list[st
     occupant : Occupant
     index : int
         The occupant's index in the notification (for the assumption text).
-    assumptions : list of str
+    assumptions : list of Assumption
         Appended with one line per replaced reading.
 
     Returns
@@ -105,8 +108,13 @@ def resolve_sensor_evidence(occupant: Occupant, index: int, assumptions: list[st
             else f"anywhere in {POSTURE_RANGE_DEG[0]:g}-{POSTURE_RANGE_DEG[1]:g} deg"
         )
         assumptions.append(
-            f"occupants[{index}]: posture not sensed: neutral lumbar flexion "
-            f"{NEUTRAL_LUMBAR_FLEXION_DEG:g} deg with SD {sd:.1f} deg in the intervals ({spread})"
+            Assumption(
+                AssumptionCode.POSTURE_NOT_SENSED,
+                f"occupants[{index}]: posture not sensed: neutral lumbar flexion "
+                f"{NEUTRAL_LUMBAR_FLEXION_DEG:g} deg with SD {sd:.1f} deg in the intervals "
+                f"({spread})",
+                index,
+            )
         )
     if occupant.seat_track_source is not SeatTrackSource.SENSOR:
         lo, hi = seat_track_range_mm(occupant.seat_track_source)
@@ -124,8 +132,14 @@ def resolve_sensor_evidence(occupant: Occupant, index: int, assumptions: list[st
             SeatTrackSource.NOT_SENSED: "seat position not sensed",
         }[occupant.seat_track_source]
         assumptions.append(
-            f"occupants[{index}]: {why}: seat track anywhere in {lo:g} to {hi:g} mm "
-            f"(mid track 0, + forward): {centre:g} mm with SD {sd:.0f} mm in the intervals"
-            + (" (SD as given)" if occupant.seat_track_sd_mm else "")
+            Assumption(
+                AssumptionCode.SEAT_POSITION_NOT_SENSED
+                if occupant.seat_track_source is SeatTrackSource.NOT_SENSED
+                else AssumptionCode.SEAT_TRACK_SWITCH,
+                f"occupants[{index}]: {why}: seat track anywhere in {lo:g} to {hi:g} mm "
+                f"(mid track 0, + forward): {centre:g} mm with SD {sd:.0f} mm in the intervals"
+                + (" (SD as given)" if occupant.seat_track_sd_mm else ""),
+                index,
+            )
         )
     return out

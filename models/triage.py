@@ -31,6 +31,7 @@ from functools import lru_cache
 from pathlib import Path
 
 from models import ENGINE_VERSION
+from models.assumptions import Assumption, AssumptionCode
 from models.baseline.logistic import BaselineFeatures, BaselineModel, load_default
 from models.constants import DEFAULT_POSTURE_SD_DEG, DEFAULT_SEAT_TRACK_SD_MM, Z_95
 from models.field.features import FieldInputs, FieldMode, field_inputs
@@ -294,7 +295,7 @@ class TriageResult:
     triage: TriageDecision
     occupants: tuple[OccupantTriage, ...]
     pulse: ProcessedPulse
-    assumptions: tuple[str, ...]
+    assumptions: tuple[Assumption, ...]
     engine_version: str
     models: Mapping[str, ModelInfo]
     timings_ms: Mapping[str, float] = field(compare=False)
@@ -433,6 +434,11 @@ def load_engine_models(
         )
     surrogates = load_surrogates(surrogate_dir) if use_surrogates else None
     parameter_sets = {name: load_parameter_set(name) for name in available_parameter_sets()}
+    # the code checksums recorded with every case are computed here, once (they parse
+    # source; CPython 3.11's parser is not safe to run from several threads at once)
+    lpm_code_sha256()
+    triage_code_sha256()
+    evaluation_sha256()
     if warm:
         warm_up()
     return EngineModels(
@@ -535,19 +541,27 @@ def _used_models(models: EngineModels, vehicle_model: str, used_lpm: bool) -> di
     return infos
 
 
-def _in_domain(occupant: Occupant, index: int, assumptions: list[str]) -> Occupant:
+def _in_domain(occupant: Occupant, index: int, assumptions: list[Assumption]) -> Occupant:
     """The occupant with posture and seat track clamped to the models' domain."""
     posture = clamp(occupant.posture_lumbar_flexion_deg, POSTURE_RANGE_DEG)
     track = clamp(occupant.seat_track_mm, SEAT_TRACK_RANGE_MM)
     if posture != occupant.posture_lumbar_flexion_deg:
         assumptions.append(
-            f"occupants[{index}]: lumbar flexion {occupant.posture_lumbar_flexion_deg:g} deg "
-            f"clamped to {posture:g} deg (occupant-model range {POSTURE_RANGE_DEG})"
+            Assumption(
+                AssumptionCode.POSTURE_CLAMPED,
+                f"occupants[{index}]: lumbar flexion {occupant.posture_lumbar_flexion_deg:g} deg "
+                f"clamped to {posture:g} deg (occupant-model range {POSTURE_RANGE_DEG})",
+                index,
+            )
         )
     if track != occupant.seat_track_mm:
         assumptions.append(
-            f"occupants[{index}]: seat track {occupant.seat_track_mm:g} mm clamped to "
-            f"{track:g} mm (occupant-model range {SEAT_TRACK_RANGE_MM})"
+            Assumption(
+                AssumptionCode.SEAT_TRACK_CLAMPED,
+                f"occupants[{index}]: seat track {occupant.seat_track_mm:g} mm clamped to "
+                f"{track:g} mm (occupant-model range {SEAT_TRACK_RANGE_MM})",
+                index,
+            )
         )
     return dataclasses.replace(occupant, posture_lumbar_flexion_deg=posture, seat_track_mm=track)
 
@@ -632,6 +646,158 @@ def _sensed(occupant: Occupant) -> bool:
     return occupant.posture_sensed and occupant.seat_track_source is SeatTrackSource.SENSOR
 
 
+@dataclass(frozen=True)
+class _Intervals:
+    """The occupant model's point P(ISS >= 15) and its intervals, by one method."""
+
+    p: float
+    p_ci: tuple[float, float]
+    iss_ci: tuple[float, float]
+    measures_ci: dict[str, tuple[float, float]]
+    method: IntervalMethod
+    outside: bool
+
+
+def _surrogate_uncertainty(
+    index: int,
+    occupant: Occupant,
+    lpm_occupant: Occupant,
+    impact: ImpactClassification,
+    pulse: ProcessedPulse,
+    models: EngineModels,
+    sds: tuple[float, float],
+    assumptions: list[Assumption],
+) -> UncertaintyResult | None:
+    """The surrogate's propagation of the sensor spread, or None (the reason noted)."""
+    # the rear surrogates are built without a frontal airbag acting; an explicit
+    # firing time makes the rear LPM use one, so the surrogate does not apply
+    rear_with_bag = impact.mode is ImpactMode.REAR and occupant.airbag_fire_time_ms is not None
+    if models.surrogates is None or rear_with_bag:
+        return None
+    try:
+        family = models.surrogates.family(
+            impact.mode,
+            occupant.body,
+            occupant.belted,
+            _mode_airbag_deployed(occupant, impact.mode),
+        )
+        uncertainty = family.propagate(
+            delta_v_kmh=pulse.delta_v_kmh,
+            angle_deg=impact.angle_from_axis_deg,
+            posture_deg=lpm_occupant.posture_lumbar_flexion_deg,
+            seat_track_mm=lpm_occupant.seat_track_mm,
+            duration_ms=pulse.haversine.duration_ms,
+            posture_sd_deg=sds[0],
+            seat_track_sd_mm=sds[1],
+            age_years=lpm_occupant.age_years,  # the chest curve the direct run used
+        )
+    except (KeyError, ValueError) as exc:
+        assumptions.append(
+            Assumption(
+                AssumptionCode.SURROGATE_UNAVAILABLE,
+                f"occupants[{index}]: surrogate unavailable ({exc}); interval from direct "
+                "occupant-model runs over the sensor-uncertainty box",
+                index,
+            )
+        )
+        return None
+    outside_design = set(uncertainty.clamped_inputs) & _CRASH_INPUTS
+    if outside_design:
+        assumptions.append(
+            Assumption(
+                AssumptionCode.OUTSIDE_SURROGATE_DESIGN,
+                f"occupants[{index}]: {', '.join(sorted(outside_design))} outside the "
+                "surrogate's design range; interval from direct occupant-model runs over "
+                "the sensor-uncertainty box",
+                index,
+            )
+        )
+        return None
+    return uncertainty
+
+
+def _intervals_from_surrogate(
+    index: int,
+    nominal: LpmResult,
+    uncertainty: UncertaintyResult,
+    sensed: bool,
+    assumptions: list[Assumption],
+) -> _Intervals:
+    """Intervals from the surrogate; the point is the spread's mean when nothing was sensed."""
+    assert nominal.assessment is not None
+    p = float(nominal.assessment.p_iss15)
+    iss = int(nominal.assessment.iss)
+    measures = _measures_dict(nominal.measures)
+    p_ci = (float(uncertainty.p_iss15_ci95[0]), float(uncertainty.p_iss15_ci95[1]))
+    iss_ci = (float(uncertainty.iss_ci95[0]), float(uncertainty.iss_ci95[1]))
+    measures_ci = {
+        k: (float(v[0]), float(v[1])) for k, v in uncertainty.measures_ci95.items() if k in measures
+    }
+    if not sensed:
+        # a posture or seat position that was not sensed is a spread, not a
+        # reading: the point estimate is the expectation over the spread the
+        # interval propagates, not the value at one assumed posture
+        p = float(uncertainty.p_iss15)
+        assumptions.append(
+            Assumption(
+                AssumptionCode.SPREAD_MEAN,
+                f"occupants[{index}]: occupant-model P(ISS >= 15) is the mean over the "
+                "unsensed posture / seat position spread; measures, region AIS and ISS "
+                "are those of the run at the assumed posture and seat position",
+                index,
+            )
+        )
+    tol = P_RESOLUTION  # the surrogate's resolution of P near 0 and 1
+    outside = not (p_ci[0] - tol <= p <= p_ci[1] + tol) or not (
+        iss_ci[0] - 0.5 <= iss <= iss_ci[1] + 0.5
+    )
+    if outside:
+        assumptions.append(
+            Assumption(
+                AssumptionCode.POINT_OUTSIDE_INTERVAL,
+                f"occupants[{index}]: the direct occupant-model estimate lies outside the "
+                "surrogate's 95% interval",
+                index,
+            )
+        )
+    else:
+        # within the surrogate's resolution of its interval (P near 0 or 1, ISS
+        # within half a point): the interval is stretched to hold the estimate,
+        # so that an unflagged answer always lies inside its own interval
+        p_ci = (min(p_ci[0], p), max(p_ci[1], p))
+        iss_ci = (min(iss_ci[0], float(iss)), max(iss_ci[1], float(iss)))
+    return _Intervals(p, p_ci, iss_ci, measures_ci, IntervalMethod.PCE_BOOTSTRAP, outside)
+
+
+def _intervals_from_box(
+    nominal: LpmResult,
+    pulse: ProcessedPulse,
+    impact: ImpactClassification,
+    lpm_occupant: Occupant,
+    params: ParameterSet,
+    sds: tuple[float, float],
+) -> _Intervals:
+    """Intervals from direct runs over the +/-1.96 SD sensor box (no surrogate)."""
+    assert nominal.assessment is not None
+    measures = _measures_dict(nominal.measures)
+    box = [nominal, *_sensor_box(pulse, impact, lpm_occupant, params, sds[0], sds[1])]
+    ps = [float(r.assessment.p_iss15) for r in box if r.assessment is not None]
+    isss = [float(r.assessment.iss) for r in box if r.assessment is not None]
+    measures_ci = {}
+    for key in measures:
+        values = [_measures_dict(r.measures).get(key) for r in box]
+        finite = [v for v in values if v is not None]
+        measures_ci[key] = (min(finite), max(finite))
+    return _Intervals(
+        float(nominal.assessment.p_iss15),
+        (min(ps), max(ps)),
+        (min(isss), max(isss)),
+        measures_ci,
+        IntervalMethod.LPM_SENSOR_BOX,
+        False,
+    )
+
+
 def _lpm_occupant(
     index: int,
     occupant: Occupant,
@@ -639,7 +805,7 @@ def _lpm_occupant(
     pulse: ProcessedPulse,
     params: ParameterSet,
     models: EngineModels,
-    assumptions: list[str],
+    assumptions: list[Assumption],
 ) -> _LpmAnswer | None:
     """Answer one in-coverage occupant with its occupant model; None when it fails."""
     sensed = _sensed(occupant)
@@ -647,153 +813,101 @@ def _lpm_occupant(
     lpm_occupant = _in_domain(occupant, index, assumptions)
     if impact.mode is ImpactMode.NEAR_SIDE and occupant.side_airbag is None:
         assumptions.append(
-            f"occupants[{index}]: side airbag state not reported: none assumed for the "
-            "near-side occupant model (the conservative choice)"
+            Assumption(
+                AssumptionCode.SIDE_AIRBAG_NOT_REPORTED,
+                f"occupants[{index}]: side airbag state not reported: none assumed for the "
+                "near-side occupant model (the conservative choice)",
+                index,
+            )
         )
     nominal = _run(pulse, impact, lpm_occupant, params)
     if nominal.assessment is None:
         assumptions.append(
-            f"occupants[{index}]: occupant model failed ({nominal.message}); "
-            "the field model decides without its explanation"
+            Assumption(
+                AssumptionCode.OCCUPANT_MODEL_FAILED,
+                f"occupants[{index}]: occupant model failed ({nominal.message}); "
+                "the field model decides without its explanation",
+                index,
+            )
         )
         return None
-    posture_sd = occupant.posture_sd_deg or models.posture_sd_deg
-    track_sd = occupant.seat_track_sd_mm or models.seat_track_sd_mm
-    p = float(nominal.assessment.p_iss15)
-    iss = int(nominal.assessment.iss)
-    measures = _measures_dict(nominal.measures)
-    uncertainty: UncertaintyResult | None = None
-    # the rear surrogates are built without a frontal airbag acting; an explicit
-    # firing time makes the rear LPM use one, so the surrogate does not apply
-    rear_with_bag = impact.mode is ImpactMode.REAR and occupant.airbag_fire_time_ms is not None
-    if models.surrogates is not None and not rear_with_bag:
-        try:
-            family = models.surrogates.family(
-                impact.mode,
-                occupant.body,
-                occupant.belted,
-                _mode_airbag_deployed(occupant, impact.mode),
-            )
-            uncertainty = family.propagate(
-                delta_v_kmh=pulse.delta_v_kmh,
-                angle_deg=impact.angle_from_axis_deg,
-                posture_deg=lpm_occupant.posture_lumbar_flexion_deg,
-                seat_track_mm=lpm_occupant.seat_track_mm,
-                duration_ms=pulse.haversine.duration_ms,
-                posture_sd_deg=posture_sd,
-                seat_track_sd_mm=track_sd,
-                age_years=lpm_occupant.age_years,  # the chest curve the direct run used
-            )
-        except (KeyError, ValueError) as exc:
-            assumptions.append(
-                f"occupants[{index}]: surrogate unavailable ({exc}); interval from direct "
-                "occupant-model runs over the sensor-uncertainty box"
-            )
-        else:
-            outside_design = set(uncertainty.clamped_inputs) & _CRASH_INPUTS
-            if outside_design:
-                assumptions.append(
-                    f"occupants[{index}]: {', '.join(sorted(outside_design))} outside the "
-                    "surrogate's design range; interval from direct occupant-model runs over "
-                    "the sensor-uncertainty box"
-                )
-                uncertainty = None
-    if uncertainty is not None:
-        p_ci = (float(uncertainty.p_iss15_ci95[0]), float(uncertainty.p_iss15_ci95[1]))
-        iss_ci = (float(uncertainty.iss_ci95[0]), float(uncertainty.iss_ci95[1]))
-        measures_ci = {
-            k: (float(v[0]), float(v[1]))
-            for k, v in uncertainty.measures_ci95.items()
-            if k in measures
-        }
-        method = IntervalMethod.PCE_BOOTSTRAP
-        if not sensed:
-            # a posture or seat position that was not sensed is a spread, not a
-            # reading: the point estimate is the expectation over the spread the
-            # interval propagates, not the value at one assumed posture
-            p = float(uncertainty.p_iss15)
-            assumptions.append(
-                f"occupants[{index}]: occupant-model P(ISS >= 15) is the mean over the "
-                "unsensed posture / seat position spread; measures, region AIS and ISS "
-                "are those of the run at the assumed posture and seat position"
-            )
-        tol = P_RESOLUTION  # the surrogate's resolution of P near 0 and 1
-        outside = not (p_ci[0] - tol <= p <= p_ci[1] + tol) or not (
-            iss_ci[0] - 0.5 <= iss <= iss_ci[1] + 0.5
-        )
-        if outside:
-            assumptions.append(
-                f"occupants[{index}]: the direct occupant-model estimate lies outside the "
-                "surrogate's 95% interval"
-            )
-        else:
-            # within the surrogate's resolution of its interval (P near 0 or 1, ISS
-            # within half a point): the interval is stretched to hold the estimate,
-            # so that an unflagged answer always lies inside its own interval
-            p_ci = (min(p_ci[0], p), max(p_ci[1], p))
-            iss_ci = (min(iss_ci[0], float(iss)), max(iss_ci[1], float(iss)))
-    else:
-        box = [nominal, *_sensor_box(pulse, impact, lpm_occupant, params, posture_sd, track_sd)]
-        ps = [float(r.assessment.p_iss15) for r in box if r.assessment is not None]
-        isss = [float(r.assessment.iss) for r in box if r.assessment is not None]
-        p_ci = (min(ps), max(ps))
-        iss_ci = (min(isss), max(isss))
-        measures_ci = {}
-        for key in measures:
-            values = [_measures_dict(r.measures).get(key) for r in box]
-            finite = [v for v in values if v is not None]
-            measures_ci[key] = (min(finite), max(finite))
-        method = IntervalMethod.LPM_SENSOR_BOX
-        outside = False
+    sds = (
+        occupant.posture_sd_deg or models.posture_sd_deg,
+        occupant.seat_track_sd_mm or models.seat_track_sd_mm,
+    )
+    uncertainty = _surrogate_uncertainty(
+        index, occupant, lpm_occupant, impact, pulse, models, sds, assumptions
+    )
+    iv = (
+        _intervals_from_surrogate(index, nominal, uncertainty, sensed, assumptions)
+        if uncertainty is not None
+        else _intervals_from_box(nominal, pulse, impact, lpm_occupant, params, sds)
+    )
     # the thresholds apply to the risk attributable to the crash loads: remove the
     # risk curves' zero-load floor from the point and from the interval, at the
     # occupant's age (the direct run and the surrogate both use it)
     p0 = zero_load_probability(nominal.measures, occupant.body, occupant.age_years, impact.mode)
-    p_corrected = corrected_probability(p, p0)
-    p_ci_corrected = (corrected_probability(p_ci[0], p0), corrected_probability(p_ci[1], p0))
+    p_ci = (corrected_probability(iv.p_ci[0], p0), corrected_probability(iv.p_ci[1], p0))
     return _LpmAnswer(
-        decision=decide(p_corrected, p_ci_corrected, LPM_THRESHOLDS[impact.mode]),
-        iss=IssEstimate(estimate=iss, ci95=iss_ci),
+        decision=decide(corrected_probability(iv.p, p0), p_ci, LPM_THRESHOLDS[impact.mode]),
+        iss=IssEstimate(estimate=int(nominal.assessment.iss), ci95=iv.iss_ci),
         region_ais=dict(nominal.assessment.region_ais),
-        measures=measures,
-        measures_ci95=measures_ci,
-        interval_method=method,
-        point_outside_interval=outside,
-        probability_uncorrected=p,
+        measures=_measures_dict(nominal.measures),
+        measures_ci95=iv.measures_ci,
+        interval_method=iv.method,
+        point_outside_interval=iv.outside,
+        probability_uncorrected=iv.p,
         probability_zero_load=p0,
         sensor_inputs=SensorInputs(
             posture_deg=lpm_occupant.posture_lumbar_flexion_deg,
-            posture_sd_deg=posture_sd,
+            posture_sd_deg=sds[0],
             seat_track_mm=lpm_occupant.seat_track_mm,
-            seat_track_sd_mm=track_sd,
+            seat_track_sd_mm=sds[1],
         ),
     )
 
 
 def _field_assumptions(
     index: int, occupant: Occupant, prediction: FieldPrediction, field_model: FieldModel
-) -> list[str]:
+) -> list[Assumption]:
     out = []
     imp = field_model.imputation
     if "age_years" in prediction.imputed:
         out.append(
-            f"occupants[{index}]: age unknown: the field model uses the calibration "
-            f"median, {imp.age_years:g} years"
+            Assumption(
+                AssumptionCode.AGE_IMPUTED,
+                f"occupants[{index}]: age unknown: the field model uses the calibration "
+                f"median, {imp.age_years:g} years",
+                index,
+            )
         )
     if "bmi" in prediction.imputed:
         out.append(
-            f"occupants[{index}]: stature or mass unknown: the field model uses the "
-            f"calibration median body mass index, {imp.bmi:.1f} kg/m2"
+            Assumption(
+                AssumptionCode.BMI_IMPUTED,
+                f"occupants[{index}]: stature or mass unknown: the field model uses the "
+                f"calibration median body mass index, {imp.bmi:.1f} kg/m2",
+                index,
+            )
         )
     if prediction.extrapolated:
         out.append(
-            f"occupants[{index}]: delta-V above the field model's calibration data "
-            f"(largest {field_model.delta_v_max_kmh:.0f} km/h): its probability is extrapolated"
+            Assumption(
+                AssumptionCode.DELTA_V_EXTRAPOLATED,
+                f"occupants[{index}]: delta-V above the field model's calibration data "
+                f"(largest {field_model.delta_v_max_kmh:.0f} km/h): its probability is "
+                "extrapolated",
+                index,
+            )
         )
     if not occupant.seat.front_row:
         out.append(
-            f"occupants[{index}]: {occupant.seat.value} seat: the field model decides (its "
-            "data have no seat column); the occupant models are of the front row"
+            Assumption(
+                AssumptionCode.SECOND_ROW_SEAT,
+                f"occupants[{index}]: {occupant.seat.value} seat: the field model decides (its "
+                "data have no seat column); the occupant models are of the front row",
+                index,
+            )
         )
     return out
 
@@ -827,7 +941,7 @@ def _occupant_evidence(
     notification: CrashNotification,
     pulse: ProcessedPulse,
     models: EngineModels,
-    assumptions: list[str],
+    assumptions: list[Assumption],
 ) -> OccupantEvidence:
     impact = classify_impact(pulse.pdof_deg, occupant.seat, notification.drive_side)
     answer: _LpmAnswer | None = None
@@ -836,8 +950,12 @@ def _occupant_evidence(
         answer = _lpm_occupant(index, occupant, impact, pulse, params, models, assumptions)
     elif occupant.seat.front_row:
         assumptions.append(
-            f"occupants[{index}]: PDOF {impact.pdof_deg:.0f} deg is outside every occupant "
-            "model's coverage; the field model decides without an occupant-model explanation"
+            Assumption(
+                AssumptionCode.OUTSIDE_OCCUPANT_MODEL_COVERAGE,
+                f"occupants[{index}]: PDOF {impact.pdof_deg:.0f} deg is outside every occupant "
+                "model's coverage; the field model decides without an occupant-model explanation",
+                index,
+            )
         )
     return OccupantEvidence(
         index=index,
@@ -913,7 +1031,7 @@ def notification_field_inputs(notification: CrashNotification) -> list[FieldInpu
 
 def occupant_evidence(
     notification: CrashNotification, models: EngineModels
-) -> tuple[list[OccupantEvidence], list[str]]:
+) -> tuple[list[OccupantEvidence], list[Assumption]]:
     """Every occupant's evidence without a decision (offline fits and checks).
 
     Needs no field model: the offline fit uses it to compute the field model's
@@ -928,7 +1046,7 @@ def occupant_evidence(
     if notification.vehicle_model not in models.vehicle_models:
         raise UnknownVehicleModel(f"unknown vehicle model {notification.vehicle_model!r}")
     pulse = process_pulse(notification.pulse)
-    assumptions: list[str] = []
+    assumptions: list[Assumption] = []
     out = [
         _occupant_evidence(i, o, notification, pulse, models, assumptions)
         for i, o in enumerate(notification.occupants)
@@ -969,16 +1087,22 @@ def triage(notification: CrashNotification, models: EngineModels) -> TriageResul
     pulse = process_pulse(notification.pulse)
     t1 = time.perf_counter()
 
-    assumptions: list[str] = []
+    assumptions: list[Assumption] = []
     if notification.rollover:
         assumptions.append(
-            "rollover reported: the field model's probability is that of a rollover (it is "
-            "in its data); the occupant models see only the planar crash pulse"
+            Assumption(
+                AssumptionCode.ROLLOVER_REPORTED,
+                "rollover reported: the field model's probability is that of a rollover (it is "
+                "in its data); the occupant models see only the planar crash pulse",
+            )
         )
     if notification.multiple_impacts:
         assumptions.append(
-            "multiple impacts reported: the field model's probability includes them (they "
-            "are in its data); the occupant models run the recorded pulse as one event"
+            Assumption(
+                AssumptionCode.MULTIPLE_IMPACTS_REPORTED,
+                "multiple impacts reported: the field model's probability includes them (they "
+                "are in its data); the occupant models run the recorded pulse as one event",
+            )
         )
 
     occupants: list[OccupantTriage] = []
@@ -1023,7 +1147,7 @@ class OccupantSimulation:
 
 def simulate_notification(
     notification: CrashNotification, models: EngineModels
-) -> tuple[ProcessedPulse, list[OccupantSimulation], list[str]]:
+) -> tuple[ProcessedPulse, list[OccupantSimulation], list[Assumption]]:
     """Run the occupant models of a notification, keeping the full time histories.
 
     Returns
@@ -1037,7 +1161,7 @@ def simulate_notification(
         raise UnknownVehicleModel(f"unknown vehicle model {notification.vehicle_model!r}")
     pulse = process_pulse(notification.pulse)
     params = models.parameter_sets[notification.vehicle_model]
-    assumptions: list[str] = []
+    assumptions: list[Assumption] = []
     out = []
     for i, occupant in enumerate(notification.occupants):
         impact = classify_impact(pulse.pdof_deg, occupant.seat, notification.drive_side)

@@ -10,6 +10,7 @@ import base64
 import binascii
 import hashlib
 import json
+import logging
 import time
 import uuid
 from dataclasses import dataclass
@@ -18,6 +19,7 @@ from typing import Any
 
 from sqlalchemy.exc import IntegrityError
 
+from models.pulse import PulseError
 from models.triage import EngineModels, Method, UnknownVehicleModel, triage
 from service.auth import Caller
 from service.context import ServiceContext
@@ -25,12 +27,15 @@ from service.conversion import to_case_result
 from service.db import repository
 from service.db.tables import Case, CaseOccupant, IdempotencyRecord
 from service.problems import (
+    EngineFailure,
     FieldError,
     IdempotencyConflict,
     NotFound,
     UnprocessableNotification,
 )
 from service.schemas import CaseList, CaseResult, CaseSummary, CrashNotificationIn, StoredCase
+
+log = logging.getLogger("aacn_triage")
 
 __all__ = [
     "InvalidCursor",
@@ -75,7 +80,11 @@ def evaluate(
     Raises
     ------
     UnprocessableNotification
-        When the content is well-formed but the engine cannot use it.
+        When the content is well-formed but the engine cannot use it (an
+        unknown vehicle model, a pulse the engine cannot process).
+    EngineFailure
+        When the engine itself fails: a 500-class problem carrying the case
+        reference, logged with it (and never with the notification's contents).
     """
     engine_input, notes = notification.to_engine()
     try:
@@ -85,10 +94,18 @@ def evaluate(
             str(exc),
             errors=[FieldError(field="vehicle.model", reason=str(exc), type="unknown_model")],
         ) from exc
-    except ValueError as exc:
+    except PulseError as exc:
         raise UnprocessableNotification(
             f"The crash pulse cannot be processed: {exc}",
             errors=[FieldError(field="crash.pulse", reason=str(exc), type="pulse_unusable")],
+        ) from exc
+    except Exception as exc:
+        reference = case_id or str(uuid.uuid4())
+        log.exception("engine failure, case reference %s (%s)", reference, type(exc).__name__)
+        raise EngineFailure(
+            f"The engine failed on this notification; nothing was stored. Case reference "
+            f"{reference} (give it to the operator: the failure is logged under it).",
+            reference=reference,
         ) from exc
     return to_case_result(result, case_id=case_id, received_at=received_at, extra_assumptions=notes)
 

@@ -340,7 +340,10 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
         "event_id": engine_input.event_id,
         "delta_v_kmh": pulse.delta_v_kmh,
         "pdof_deg": pulse.pdof_deg,
-        "assumptions": [*notes, *assumptions],
+        "assumptions": [
+            {"code": a.code.value, "message": a.message, "occupant": a.occupant}
+            for a in (*notes, *assumptions)
+        ],
         "occupants": [],
     }
     plots = []

@@ -5,8 +5,10 @@ from __future__ import annotations
 import dataclasses
 from datetime import datetime
 
+from models.assumptions import Assumption
 from models.triage import OccupantTriage, TriageDecision, TriageResult
 from service.schemas import (
+    AssumptionOut,
     CaseResult,
     HaversineOut,
     IssOut,
@@ -66,7 +68,7 @@ def to_case_result(
     *,
     case_id: str | None,
     received_at: datetime,
-    extra_assumptions: list[str] | None = None,
+    extra_assumptions: list[Assumption] | None = None,
 ) -> CaseResult:
     """The wire form of an engine result."""
     p = result.pulse
@@ -89,7 +91,10 @@ def to_case_result(
                 r_squared=p.haversine.r_squared,
             ),
         ),
-        assumptions=[*(extra_assumptions or []), *result.assumptions],
+        assumptions=[
+            AssumptionOut(code=a.code, message=a.message, occupant=a.occupant)
+            for a in (*(extra_assumptions or []), *result.assumptions)
+        ],
         engine_version=result.engine_version,
         models={
             name: ModelVersionOut(version=m.version, sha256=m.sha256)

@@ -112,8 +112,12 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         "haversine": {"amplitude_g": 31.72, "duration_ms": 100.0, "r_squared": 1.0},
     },
     "assumptions": [
-        "occupants[0]: stature or mass unknown: the field model uses the calibration "
-        "median body mass index, 25.1 kg/m2"
+        {
+            "code": "bmi_imputed",
+            "message": "occupants[0]: stature or mass unknown: the field model uses the "
+            "calibration median body mass index, 25.1 kg/m2",
+            "occupant": 0,
+        }
     ],
     "engine_version": "0.2.0",
     "models": {
@@ -123,7 +127,7 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         },
         "field_model": {
             "version": "1.0.0",
-            "sha256": "1eb6a131bd03a306ee940a6f136195192f8f69a8d3e4694ec63ac717144bd712",
+            "sha256": "1143c9b93b61d59b20a0fa33c1c5cae5ac707ec7903db30daec45189455dd623",
         },
         "lpm_parameters:compact_sedan": {
             "version": "compact_sedan",
@@ -131,11 +135,11 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         },
         "lpm_code": {
             "version": "0.2.0",
-            "sha256": "8991761c3b3aa940fbc4326062ff6d44973b0aaf690e7496ae063ca8cdd79127",
+            "sha256": "26d8c71553e1c21dab8e8e23483a868cb6a8d46ab18bcd9d1b3eaac28d35120e",
         },
         "triage_code": {
             "version": "0.2.0",
-            "sha256": "3c5a5cb21015b2e70180611eabe4b373fa619e8241c0b35de48cc6563e72afb2",
+            "sha256": "6309e38c374dc0889be4e0b72a79eb1f40bb95f5fc42ad5cf92c81965892af77",
         },
         "risk_calibration": {
             "version": "1",
@@ -143,14 +147,14 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         },
         "surrogates": {
             "version": "6.0.2.0",
-            "sha256": "833e36e7eedd24d35e4b71682e6adc09ec8266173ffd10a3d6f8ee91c342665d",
+            "sha256": "968ec93dc1d1be545b9825c99c258516615aa85c6d88b0c4213280eb5c31aa74",
         },
         "surrogate_evaluation": {
             "version": "7",
-            "sha256": "d0fbb019a6456227d2c615db656586e5d1c067d9f6622e1d99ea9207a6b36021",
+            "sha256": "6e678c22c79b1d7b01e6dc32b68fa5497cadb14d619037e6389b1fb99ef61dc8",
         },
     },
-    "timings_ms": {"pulse": 0.07, "occupants": 12.61, "field_model": 0.08, "engine_total": 12.68},
+    "timings_ms": {"pulse": 0.07, "occupants": 10.03, "field_model": 0.08, "engine_total": 10.11},
 }
 
 #: `GET /v1/cases/{case_id}`.

@@ -130,6 +130,16 @@ class UnprocessableNotification(DomainError):
     status, slug, title = 422, "validation", "Invalid notification"
 
 
+class EngineFailure(DomainError):
+    """The engine failed on a valid notification (a defect of ours, not of the input)."""
+
+    status, slug, title = 500, "engine-failure", "The engine failed"
+
+    def __init__(self, detail: str, *, reference: str) -> None:
+        super().__init__(detail)
+        self.reference = reference
+
+
 def problem_response(
     status: int,
     title: str,

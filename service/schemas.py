@@ -20,9 +20,12 @@ from pydantic import (
     model_validator,
 )
 
+from models import limits
 from models import notification as engine
+from models.assumptions import DESCRIPTIONS, Assumption, AssumptionCode
 from models.field.features import FieldMode
 from models.impact_mode import ImpactMode
+from models.pulse import haversine, haversine_amplitude_g
 from models.triage import IntervalMethod, Method
 from service.examples import EXAMPLE_CASE_LIST, EXAMPLE_CASE_RESULT, EXAMPLE_STORED_CASE
 
@@ -40,22 +43,14 @@ __all__ = [
     "VehicleIn",
 ]
 
-#: Largest accepted delta-V, km/h (issue 2: "delta-V above 200 km/h refused").
-MAX_DELTA_V_KMH = 200.0
-#: Largest accepted acceleration magnitude, g. [R] Vehicle crash pulses of
-#: passenger cars stay well under 200 g even on a rigid pole; 500 g allows
-#: unfiltered sensor spikes while refusing unit mistakes (m/s^2 sent as g).
-MAX_ACCEL_G = 500.0
-#: Acceleration series: sample-rate bounds, Hz. [R] EDR and crash sensor
-#: channels are sampled at 100 Hz to 20 kHz (SAE J211 recommends >= 10 kHz).
-MIN_SAMPLE_RATE_HZ, MAX_SAMPLE_RATE_HZ = 100.0, 50_000.0
-#: Series length bounds (samples). A pulse needs at least 20 ms of samples at the lowest
-#: rate; 60,000 samples is 3 s at 20 kHz.
-MIN_SERIES_SAMPLES, MAX_SERIES_SAMPLES = 3, 60_000
-#: Series duration bounds, ms: at least 20 ms, at most 3 s.
-MIN_SERIES_MS, MAX_SERIES_MS = 20.0, 3000.0
-#: EDR delta-V records: 49 CFR 563 Table I records 0-250 ms at 100 Hz (10 ms).
-MIN_EDR_INTERVAL_MS, MAX_EDR_INTERVAL_MS = 1.0, 50.0
+#: The input limits are the engine's own (one set, ``models/limits.py``).
+MAX_DELTA_V_KMH = limits.MAX_DELTA_V_KMH
+MAX_ACCEL_G = limits.MAX_ABS_ACCELERATION_G
+MIN_SAMPLE_RATE_HZ = limits.MIN_ACCELERATION_SAMPLE_RATE_HZ
+MAX_SAMPLE_RATE_HZ = limits.MAX_ACCELERATION_SAMPLE_RATE_HZ
+MIN_SERIES_SAMPLES, MAX_SERIES_SAMPLES = limits.MIN_SAMPLES, limits.MAX_SAMPLES
+MIN_SERIES_MS, MAX_SERIES_MS = limits.MIN_RECORD_DURATION_MS, limits.MAX_RECORD_DURATION_MS
+MIN_EDR_INTERVAL_MS, MAX_EDR_INTERVAL_MS = limits.MIN_EDR_INTERVAL_MS, limits.MAX_EDR_INTERVAL_MS
 #: Hybrid III anthropometry used to map stature and mass to the nearer dummy
 #: (defined once in the engine).
 DUMMY_STATURE_MASS = engine.DUMMY_STATURE_MASS
@@ -83,7 +78,7 @@ class AccelerationPulseIn(WireModel):
 
     kind: Literal["acceleration"] = Field(description="Pulse kind tag.")
     sample_rate_hz: float = Field(
-        ge=MIN_SAMPLE_RATE_HZ,
+        gt=MIN_SAMPLE_RATE_HZ,
         le=MAX_SAMPLE_RATE_HZ,
         description="Sampling rate of both series, Hz.",
         examples=[10000.0],
@@ -244,10 +239,17 @@ class OccupantIn(WireModel):
         "and `mass_kg`, or `male_50th` when neither is known (reported as an assumption).",
     )
     stature_cm: float | None = Field(
-        default=None, ge=50.0, le=250.0, description="Occupant stature, cm."
+        default=None,
+        ge=limits.MIN_STATURE_CM,
+        le=limits.MAX_STATURE_CM,
+        description="Occupant stature, cm.",
     )
-    mass_kg: float | None = Field(default=None, ge=10.0, le=300.0, description="Occupant mass, kg.")
-    age_years: float | None = Field(default=None, ge=0.0, le=120.0, description="Age, years.")
+    mass_kg: float | None = Field(
+        default=None, ge=limits.MIN_MASS_KG, le=limits.MAX_MASS_KG, description="Occupant mass, kg."
+    )
+    age_years: float | None = Field(
+        default=None, ge=0.0, le=limits.MAX_AGE_YEARS, description="Age, years."
+    )
     sex: engine.Sex | None = Field(default=None, description="Sex of the occupant.")
     belted: bool = Field(description="Seat belt fastened.")
     frontal_airbag: engine.AirbagState = Field(
@@ -296,14 +298,22 @@ class OccupantIn(WireModel):
         default=None, gt=0.0, le=200.0, description="Seat position sensor standard deviation, mm."
     )
 
-    def resolved_body(self) -> tuple[engine.Body, str | None]:
+    def resolved_body(self, index: int = 0) -> tuple[engine.Body, Assumption | None]:
         """The dummy class to use and, when it was not given, how it was chosen."""
         if self.body is not None:
             return self.body, None
         body = engine.nearest_body(self.stature_cm, self.mass_kg)
         if body is None:
-            return engine.Body.MALE_50TH, "body unknown: Hybrid III 50th male assumed"
-        return body, f"body mapped from stature/mass to the nearer dummy: {body.value}"
+            return engine.Body.MALE_50TH, Assumption(
+                AssumptionCode.BODY_UNKNOWN,
+                f"occupants[{index}]: body unknown: Hybrid III 50th male assumed",
+                index,
+            )
+        return body, Assumption(
+            AssumptionCode.BODY_FROM_STATURE_MASS,
+            f"occupants[{index}]: body mapped from stature/mass to the nearer dummy: {body.value}",
+            index,
+        )
 
     def _seat_track_source(self) -> engine.SeatTrackSource:
         if self.seat_track_mm is not None:
@@ -314,8 +324,8 @@ class OccupantIn(WireModel):
             return engine.SeatTrackSource.FOREMOST_SWITCH_ON
         return engine.SeatTrackSource.FOREMOST_SWITCH_OFF
 
-    def to_engine(self) -> tuple[engine.Occupant, str | None]:
-        body, note = self.resolved_body()
+    def to_engine(self, index: int = 0) -> tuple[engine.Occupant, Assumption | None]:
+        body, note = self.resolved_body(index)
         return (
             engine.Occupant(
                 seat=self.seat,
@@ -346,14 +356,11 @@ class OccupantIn(WireModel):
 
 def _haversine_example(delta_v_kmh: float, duration_ms: float, n: int) -> list[float]:
     """A short frontal haversine pulse for the OpenAPI example (1 kHz)."""
-    # delta-V = A g T / 2 for a(t) = A sin^2(pi t / T)
-    amplitude_g = 2.0 * delta_v_kmh / 3.6 / (9.80665 * duration_ms / 1000.0)
-    out = []
-    for i in range(n):
-        t_ms = float(i)
-        a = amplitude_g * math.sin(math.pi * t_ms / duration_ms) ** 2 if t_ms <= duration_ms else 0
-        out.append(round(-a, 3))
-    return out
+    t_s = [i / 1000.0 for i in range(n)]
+    a = haversine(
+        t_s, haversine_amplitude_g(delta_v_kmh, duration_ms / 1000.0), duration_ms / 1000.0
+    )
+    return [round(-float(v), 3) for v in a]
 
 
 EXAMPLE_NOTIFICATIONS: dict[str, dict[str, Any]] = {
@@ -495,15 +502,15 @@ class CrashNotificationIn(WireModel):
             raise ValueError("each seat may appear once in `occupants`")
         return self
 
-    def to_engine(self) -> tuple[engine.CrashNotification, list[str]]:
+    def to_engine(self) -> tuple[engine.CrashNotification, list[Assumption]]:
         """Convert to the engine's frozen input and the assumptions made on the way."""
         occupants: list[engine.Occupant] = []
-        notes: list[str] = []
+        notes: list[Assumption] = []
         for i, occ in enumerate(self.occupants):
-            converted, note = occ.to_engine()
+            converted, note = occ.to_engine(i)
             occupants.append(converted)
-            if note:
-                notes.append(f"occupants[{i}]: {note}")
+            if note is not None:
+                notes.append(note)
         return (
             engine.CrashNotification(
                 event_id=self.event_id,
@@ -691,6 +698,20 @@ class OccupantOut(OutModel):
     )
 
 
+class AssumptionOut(OutModel):
+    """One assumption of an answer: a stable code, the occupant, the words."""
+
+    code: AssumptionCode = Field(
+        description="Stable code (act on it; the codes and their meaning: "
+        + "; ".join(f"`{c.value}`: {d}" for c, d in DESCRIPTIONS.items())
+        + ")."
+    )
+    message: str = Field(description="The assumption in words, with its numbers.")
+    occupant: int | None = Field(
+        default=None, description="Index of the occupant it concerns; null for the whole crash."
+    )
+
+
 class ModelVersionOut(OutModel):
     """Version and checksum of one model artifact."""
 
@@ -709,7 +730,7 @@ class CaseResult(OutModel):
     triage: TriageOut = Field(description="The case-level decision: the worst occupant's.")
     occupants: list[OccupantOut] = Field(description="One result per occupant, in input order.")
     pulse: PulseOut
-    assumptions: list[str] = Field(
+    assumptions: list[AssumptionOut] = Field(
         default_factory=list, description="What the engine assumed or clamped."
     )
     engine_version: str = Field(description="Version of the engine code.")

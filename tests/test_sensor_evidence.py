@@ -7,6 +7,7 @@ import math
 
 import pytest
 
+from models.assumptions import Assumption, AssumptionCode
 from models.lpm.domain import SEAT_TRACK_RANGE_MM
 from models.notification import (
     NEUTRAL_LUMBAR_FLEXION_DEG,
@@ -41,7 +42,7 @@ def models() -> EngineModels:
 
 
 def test_a_sensed_occupant_is_returned_unchanged() -> None:
-    notes: list[str] = []
+    notes: list[Assumption] = []
     assert resolve_sensor_evidence(DRIVER, 0, notes) is DRIVER
     assert notes == []
 
@@ -63,7 +64,7 @@ def test_uniform_sd_is_width_over_root_12() -> None:
 def test_seat_evidence_becomes_the_centre_and_spread_of_its_range(
     source: SeatTrackSource, low: float, high: float
 ) -> None:
-    notes: list[str] = []
+    notes: list[Assumption] = []
     occ = dataclasses.replace(DRIVER, seat_track_mm=99.0, seat_track_source=source)
     out = resolve_sensor_evidence(occ, 2, notes)
     assert seat_track_range_mm(source) == (low, high)
@@ -71,8 +72,14 @@ def test_seat_evidence_becomes_the_centre_and_spread_of_its_range(
     assert out.seat_track_mm == pytest.approx(0.5 * (low + high))
     assert out.seat_track_sd_mm == pytest.approx((high - low) / math.sqrt(12.0))
     assert len(notes) == 1
-    assert notes[0].startswith("occupants[2]: ")
-    assert f"{low:g} to {high:g} mm" in notes[0]
+    assert notes[0].message.startswith("occupants[2]: ")
+    assert notes[0].occupant == 2
+    assert f"{low:g} to {high:g} mm" in notes[0].message
+    assert notes[0].code is (
+        AssumptionCode.SEAT_POSITION_NOT_SENSED
+        if source is SeatTrackSource.NOT_SENSED
+        else AssumptionCode.SEAT_TRACK_SWITCH
+    )
 
 
 def test_the_switch_ranges_split_the_track() -> None:
@@ -85,13 +92,14 @@ def test_the_switch_ranges_split_the_track() -> None:
 
 
 def test_an_unsensed_posture_is_neutral_with_the_range_spread_and_explicit_sds_are_kept() -> None:
-    notes: list[str] = []
+    notes: list[Assumption] = []
     occ = dataclasses.replace(DRIVER, posture_lumbar_flexion_deg=20.0, posture_sensed=False)
     out = resolve_sensor_evidence(occ, 0, notes)
     assert out.posture_sensed
     assert out.posture_lumbar_flexion_deg == NEUTRAL_LUMBAR_FLEXION_DEG
     assert out.posture_sd_deg == pytest.approx(UNSENSED_POSTURE_SD_DEG)
-    assert "posture not sensed" in notes[0]
+    assert "posture not sensed" in notes[0].message
+    assert notes[0].code is AssumptionCode.POSTURE_NOT_SENSED
     own = dataclasses.replace(
         occ,
         posture_sd_deg=3.0,
@@ -130,16 +138,16 @@ def test_without_readings_the_answer_is_the_spread_mean_and_its_intervals_are_wi
     lo, hi = b.occupant_model.probability_ci95
     assert lo <= b.occupant_model.probability <= hi
     assert _width(b.occupant_model.probability_ci95) > _width(a.occupant_model.probability_ci95)
-    assert any("mean over the unsensed" in x for x in blind.assumptions)
+    assert any("mean over the unsensed" in x.message for x in blind.assumptions)
     assert b.iss is not None
     assert a.iss is not None
     assert _width(b.iss.ci95) > _width(a.iss.ci95)
     assert b.measures_ci95 is not None
     assert a.measures_ci95 is not None
     assert _width(b.measures_ci95["hic15"]) > _width(a.measures_ci95["hic15"])
-    assert any("posture not sensed" in x for x in blind.assumptions)
-    assert any("seat position not sensed" in x for x in blind.assumptions)
-    assert not any("not sensed" in x for x in sensed.assumptions)
+    assert any("posture not sensed" in x.message for x in blind.assumptions)
+    assert any("seat position not sensed" in x.message for x in blind.assumptions)
+    assert not any("not sensed" in x.message for x in sensed.assumptions)
 
 
 def test_a_foremost_switch_puts_the_seat_in_the_forward_part_of_the_track(
@@ -157,10 +165,12 @@ def test_a_foremost_switch_puts_the_seat_in_the_forward_part_of_the_track(
     assert a.triage.probability == b.triage.probability
     assert a.measures == b.measures
     assert a.measures_ci95 != b.measures_ci95
-    note = next(x for x in by_switch.assumptions if "seat track switch says foremost" in x)
+    note = next(
+        x.message for x in by_switch.assumptions if "seat track switch says foremost" in x.message
+    )
     assert f"{lo:g} to {hi:g} mm" in note
     assert "SD 23 mm" in note
-    assert not any("seat track" in x for x in by_reading.assumptions)
+    assert not any("seat track" in x.message for x in by_reading.assumptions)
 
 
 def test_simulate_runs_the_same_nominal_occupant_as_triage(models: EngineModels) -> None:
@@ -176,4 +186,4 @@ def test_simulate_runs_the_same_nominal_occupant_as_triage(models: EngineModels)
     assert sims[0].occupant.seat_track_mm == pytest.approx(80.0)
     assert answer.measures is not None
     assert sims[0].result.measures.hic15 == answer.measures["hic15"]
-    assert any("seat track switch says foremost" in n for n in notes)
+    assert any("seat track switch says foremost" in n.message for n in notes)

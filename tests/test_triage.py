@@ -117,7 +117,7 @@ def test_out_of_coverage_occupants_get_the_field_model_and_a_note(models: Engine
     assert occ.occupant_model is None
     assert occ.iss is None
     assert occ.interval_method is None
-    assert any("outside every occupant model" in a for a in result.assumptions)
+    assert any("outside every occupant model" in a.message for a in result.assumptions)
     assert set(result.models) == {"baseline", "field_model", "triage_code"}
 
 
@@ -157,7 +157,7 @@ def test_out_of_domain_sensor_values_are_clamped_and_reported(models: EngineMode
         seat_track_mm=-250.0,
     )
     result = triage(_notification(occupants=(occupant,), rollover=True), models)
-    text = " ".join(result.assumptions)
+    text = " ".join(a.message for a in result.assumptions)
     assert "clamped to 25 deg" in text
     assert "clamped to -120 mm" in text
     assert "rollover" in text
@@ -229,7 +229,9 @@ def test_flagged_when_the_direct_estimate_is_outside_the_surrogate_interval(
         iss_inside = occ.iss.ci95[0] - 0.5 <= occ.iss.estimate <= occ.iss.ci95[1] + 0.5
         assert occ.point_outside_interval == (not (inside and iss_inside))
         if occ.point_outside_interval:
-            assert any("outside the surrogate's 95% interval" in a for a in result.assumptions)
+            assert any(
+                "outside the surrogate's 95% interval" in a.message for a in result.assumptions
+            )
 
 
 def test_without_surrogates_the_interval_comes_from_direct_runs() -> None:
@@ -276,7 +278,7 @@ def test_second_row_occupants_are_answered_by_the_field_model(
     assert not rear.impact.in_lpm_coverage
     assert rear.triage.outcome == front.triage.outcome == "MAIS3+"
     assert rear.occupant_model is None
-    assert any(f"{seat.value} seat" in a for a in result.assumptions)
+    assert any(f"{seat.value} seat" in a.message for a in result.assumptions)
 
 
 @pytest.mark.parametrize(
@@ -301,21 +303,18 @@ def test_every_case_records_the_code_that_turned_it_into_an_answer(models: Engin
     """The orchestration's own checksum (over its sources, as stored) and the
     surrogate evaluation's, beside the models they call; a baseline-only answer
     records the orchestration too."""
-    import hashlib
     from pathlib import Path
 
     import models as engine_package
+    from models.codehash import source_tree_sha256
     from models.surrogate.evaluate import EVALUATION_VERSION, evaluation_sha256
     from models.triage import TRIAGE_SOURCES, triage_code_sha256
 
     root = Path(engine_package.__file__).resolve().parent
-    digest = hashlib.sha256()
-    for rel in TRIAGE_SOURCES:
-        digest.update(rel.encode() + b"\0")
-        digest.update((root / rel).read_bytes().replace(b"\r\n", b"\n") + b"\0")
-    assert triage_code_sha256() == digest.hexdigest()
+    expected = source_tree_sha256([root / rel for rel in TRIAGE_SOURCES])
+    assert triage_code_sha256() == expected
     lpm = triage(_notification(), models)
-    assert lpm.models["triage_code"].sha256 == digest.hexdigest()
+    assert lpm.models["triage_code"].sha256 == expected
     assert lpm.models["surrogate_evaluation"].version == EVALUATION_VERSION
     assert lpm.models["surrogate_evaluation"].sha256 == evaluation_sha256()
     rear_seat = dataclasses.replace(_notification().occupants[0], seat=Seat.REAR_LEFT)

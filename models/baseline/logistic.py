@@ -32,6 +32,7 @@ from typing import Any, Final
 import numpy as np
 import numpy.typing as npt
 
+from models import limits
 from models.notification import Sex
 
 __all__ = [
@@ -78,11 +79,9 @@ INPUT_FEATURE_NAMES: Final[tuple[str, ...]] = FEATURE_NAMES[1:]
 #: Two-sided 95 % standard normal quantile, ``Phi^-1(0.975)``.
 Z_95: Final[float] = 1.959963984540054
 
-#: Largest delta-V accepted, km/h (issue 2: above 200 km/h is refused).
-MAX_DELTA_V_KMH: Final[float] = 200.0
-
-#: Largest age accepted, years. [R] Oldest occupant in the data is 97.
-MAX_AGE_YEARS: Final[float] = 120.0
+#: Largest delta-V and age accepted (the engine's limits, ``models/limits.py``).
+MAX_DELTA_V_KMH: Final[float] = limits.MAX_DELTA_V_KMH
+MAX_AGE_YEARS: Final[float] = limits.MAX_AGE_YEARS
 
 _ARTIFACT_FILE: Final[str] = "nass_logistic_v1.json"
 _SYMMETRY_RTOL: Final[float] = 1e-9

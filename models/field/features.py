@@ -28,6 +28,7 @@ import numpy as np
 import numpy.typing as npt
 
 from models.impact_mode import ImpactMode
+from models.limits import MAX_AGE_YEARS, MAX_DELTA_V_KMH
 from models.notification import Occupant, Sex
 
 __all__ = [
@@ -88,10 +89,6 @@ MIN_LOG_DELTA_V_KMH: Final[float] = 1.0
 #: rows span 13.6-65.8; a stature and mass outside it (a typing slip, a child's
 #: stature with an adult's mass) is clamped instead of extrapolated.
 BMI_RANGE: Final[tuple[float, float]] = (13.0, 66.0)
-
-#: Largest delta-V accepted, km/h (as the statistical baseline; the wire schema
-#: refuses more).
-MAX_DELTA_V_KMH: Final[float] = 200.0
 
 
 @dataclass(frozen=True)
@@ -234,7 +231,7 @@ def design_matrix(
             age = imputation.age_years
             missing.append("age_years")
         else:
-            age = _check("age_years", f.age_years, 0.0, 130.0)
+            age = _check("age_years", f.age_years, 0.0, MAX_AGE_YEARS)
         bmi = f.bmi
         if bmi is None or not math.isfinite(bmi):
             bmi = imputation.bmi

@@ -1,16 +1,20 @@
 """A checksum of the code that determines an occupant simulation's numbers.
 
-Recorded with every case and in every surrogate artifact, so that a surrogate
-built from other model code is detected at load (the service is then not
-ready), and an audit can tell which model code produced a case.
+Recorded with every case and in every surrogate artifact, so that an audit can
+tell which model code produced a case. It is the checksum of the code's
+normalised syntax tree (:mod:`models.codehash`): a docstring, a comment or a
+reformat do not change it. Whether the shipped surrogates still fit the
+occupant models is not decided by this checksum but by rerunning their golden
+cases (:mod:`models.surrogate.golden`).
 """
 
 from __future__ import annotations
 
-import hashlib
 from collections.abc import Sequence
 from functools import lru_cache
 from pathlib import Path
+
+from models.codehash import source_tree_sha256
 
 __all__ = ["MODEL_SOURCES", "lpm_code_sha256", "sources_sha256"]
 
@@ -34,20 +38,14 @@ MODEL_SOURCES = (
 
 
 def sources_sha256(sources: Sequence[str], root: Path = _MODELS) -> str:
-    """SHA-256 over source files (name and bytes, in the given order; line ends as LF).
+    """SHA-256 over the normalised syntax trees of source files, in the given order.
 
     Parameters
     ----------
     sources : sequence of str
         Paths relative to `root` (default: the ``models`` package).
     """
-    digest = hashlib.sha256()
-    for rel in sources:
-        digest.update(rel.encode())
-        digest.update(b"\0")
-        digest.update((root / rel).read_bytes().replace(b"\r\n", b"\n"))
-        digest.update(b"\0")
-    return digest.hexdigest()
+    return source_tree_sha256([root / rel for rel in sources])
 
 
 @lru_cache(maxsize=1)

@@ -99,6 +99,18 @@ class ParameterSet:
         """Parameter names, sorted."""
         return sorted(self.entries)
 
+    @property
+    def values_sha256(self) -> str:
+        """SHA-256 of the values alone (canonical JSON of name -> value).
+
+        What the physics reads: units, sources, bounds, descriptions and the
+        file's layout do not enter it, so editing a source or reformatting the
+        file leaves it unchanged, and changing any value changes it.
+        """
+        values = {k: e.value for k, e in sorted(self.entries.items())}
+        text = json.dumps(values, sort_keys=True, separators=(",", ":"), allow_nan=False)
+        return hashlib.sha256(text.encode()).hexdigest()
+
     def to_document(self) -> dict[str, Any]:
         """The set as a JSON-ready document (the file format)."""
         params: dict[str, dict[str, Any]] = {}

@@ -12,9 +12,9 @@ import math
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ["haversine_pulse", "ncap_frontal_pulse", "side_pulse"]
+from models.pulse import haversine, haversine_amplitude_g
 
-G0 = 9.80665
+__all__ = ["haversine_pulse", "ncap_frontal_pulse", "side_pulse"]
 
 
 def haversine_pulse(
@@ -45,8 +45,7 @@ def haversine_pulse(
         J211 axes, g.
     """
     t = np.arange(int(round(record_s * sample_rate_hz)) + 1) / sample_rate_hz
-    amp = 2.0 * delta_v_kmh / 3.6 / duration_s / G0  # g
-    a = np.where(t <= duration_s, amp * np.sin(np.pi * t / duration_s) ** 2, 0.0)
+    a = haversine(t, haversine_amplitude_g(delta_v_kmh, duration_s), duration_s)
     th = math.radians(angle_deg)
     return t, -a * math.cos(th), -a * math.sin(th)
 

@@ -50,11 +50,11 @@ Propagation (reference paper section 2.5; issue 5)
 
 from __future__ import annotations
 
-import hashlib
 import json
 import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+from functools import lru_cache
 from pathlib import Path
 from types import MappingProxyType
 from typing import Any, Final
@@ -64,6 +64,7 @@ import numpy.typing as npt
 from scipy.sparse import csr_array
 
 import models.injury.batch as _batch_module
+from models.codehash import source_tree_sha256
 from models.impact_mode import ImpactMode
 from models.injury.batch import p_iss15_batch
 from models.notification import Body
@@ -122,13 +123,13 @@ _EVALUATION_SOURCES: Final[tuple[Path, ...]] = (
 )
 
 
+@lru_cache(maxsize=1)
 def evaluation_sha256() -> str:
-    """SHA-256 over the evaluation's sources (its checksum in a case record)."""
-    digest = hashlib.sha256()
-    for path in _EVALUATION_SOURCES:
-        digest.update(path.name.encode() + b"\0")
-        digest.update(path.read_bytes().replace(b"\r\n", b"\n"))
-    return digest.hexdigest()
+    """SHA-256 over the evaluation's sources (its checksum in a case record).
+
+    Of the normalised syntax trees (:mod:`models.codehash`): docstrings and layout aside.
+    """
+    return source_tree_sha256(_EVALUATION_SOURCES)
 
 
 #: z of a two-sided 95% Gaussian interval.
@@ -1266,17 +1267,27 @@ class SurrogateLibrary:
         return self._families[family_name(mode, Body(body), bool(belted), bag)]
 
     def stale_reason(self) -> str | None:
-        """Why the library does not match the current LPM code and parameters, or None."""
-        from models import ENGINE_VERSION
-        from models.lpm.fingerprint import lpm_code_sha256
-        from models.lpm.params import load_parameter_set
+        """Why the library no longer fits the occupant models, or None.
 
-        if self.lpm_code_sha256 != lpm_code_sha256():
-            return "surrogates were built from other LPM code (lpm_code_sha256 differs)"
-        if self.parameter_set_sha256 != load_parameter_set().sha256:
-            return "surrogates were built from another LPM parameter set (sha256 differs)"
+        What the families depend on is checked by running it: the parameter
+        values (their checksum) and the golden cases recorded in the manifest
+        (:mod:`models.surrogate.golden`), rerun now. A docstring edit, a
+        reformat or a refactor that keeps the numbers leaves the library
+        current; a change of physics or of a parameter value does not.
+        """
+        from models import ENGINE_VERSION
+        from models.lpm.params import load_parameter_set
+        from models.surrogate.golden import golden_mismatch
+
+        golden = self.manifest.get("golden")
+        if not golden:
+            return "the surrogate manifest records no golden cases; rebuild the surrogates"
         if self.engine_version != ENGINE_VERSION:
             return (
                 f"surrogates were built by engine {self.engine_version}, running {ENGINE_VERSION}"
             )
+        specs = {s.name: s for s in FAMILIES}
+        reason = golden_mismatch(golden, specs, load_parameter_set())
+        if reason is not None:
+            return reason
         return None

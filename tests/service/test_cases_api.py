@@ -151,8 +151,8 @@ def test_side_airbags_reach_the_near_side_model(api: ApiClient) -> None:
     for result in (with_bags, unknown):
         assert result["occupants"][0]["impact_mode"] == "near_side"
         assert result["occupants"][0]["method"] == "lpm"
-    assert any("side airbag state not reported" in a for a in unknown["assumptions"])
-    assert not any("side airbag" in a for a in with_bags["assumptions"])
+    assert any("side airbag state not reported" in a["message"] for a in unknown["assumptions"])
+    assert not any("side airbag" in a["message"] for a in with_bags["assumptions"])
     bags, none = with_bags["occupants"][0], unknown["occupants"][0]
     assert bags["measures"]["hic15"] < none["measures"]["hic15"]
     assert bags["iss"]["estimate"] <= none["iss"]["estimate"]
@@ -171,7 +171,13 @@ def test_a_notification_with_second_row_occupants_is_triaged_not_refused(
     assert response.status_code == 201, response.text
     result = response.json()
     assert [o["method"] for o in result["occupants"]] == ["lpm", "field", "field"]
-    assert sum("the occupant models are of the front row" in a for a in result["assumptions"]) == 2
+    assert (
+        sum(
+            "the occupant models are of the front row" in a["message"]
+            for a in result["assumptions"]
+        )
+        == 2
+    )
 
 
 def test_posture_and_seat_evidence_reach_the_answer(api: ApiClient) -> None:
@@ -193,7 +199,7 @@ def test_posture_and_seat_evidence_reach_the_answer(api: ApiClient) -> None:
         response = api.client.post("/v1/cases", json=body, headers=api.headers("submitter"))
         assert response.status_code == 201, response.text
         answers[label] = response.json()
-    notes = {k: " ".join(v["assumptions"]) for k, v in answers.items()}
+    notes = {k: " ".join(a["message"] for a in v["assumptions"]) for k, v in answers.items()}
     assert "posture not sensed" in notes["none"]
     assert "seat position not sensed" in notes["none"]
     assert "seat track switch says foremost" in notes["switch"]

@@ -128,3 +128,34 @@ def test_readyz_is_503_on_a_stale_field_artifact(tmp_path: Path) -> None:
     with TestClient(create_app(settings)) as client:
         problem = assert_problem(client.get("/readyz"), 503)
         assert "stale" in json.dumps(problem)
+
+
+def test_enumerations_and_assumption_codes_are_in_the_openapi_document(api: ApiClient) -> None:
+    from models.assumptions import DESCRIPTIONS, AssumptionCode
+
+    doc = api.client.get("/openapi.json").json()
+    schemas = doc["components"]["schemas"]
+    assert set(schemas["Method"]["enum"]) == {"lpm", "field"}
+    assert set(schemas["IntervalMethod"]["enum"]) == {"pce_bootstrap", "lpm_sensor_box"}
+    assert set(schemas["ImpactMode"]["enum"]) == {"frontal", "rear", "near_side", "far_side"}
+    assert set(schemas["FieldMode"]["enum"]) >= {"rollover"}
+    assert set(schemas["AssumptionCode"]["enum"]) == {c.value for c in AssumptionCode}
+    assert set(DESCRIPTIONS) == set(AssumptionCode), "every code is documented"
+
+
+def test_assumptions_carry_codes_an_integrator_can_act_on(api: ApiClient) -> None:
+    body = summary(30.0, 0.0)
+    occ = body["occupants"][0]
+    for key in ("age_years", "posture_lumbar_flexion_deg", "seat_track_mm", "body"):
+        occ.pop(key, None)
+    body["crash"]["rollover"] = True
+    r = api.client.post("/v1/cases", json=body, headers=api.headers("submitter"))
+    assert r.status_code == 201, r.text
+    codes = {(a["code"], a["occupant"]) for a in r.json()["assumptions"]}
+    assert ("rollover_reported", None) in codes
+    assert ("age_imputed", 0) in codes
+    assert ("body_unknown", 0) in codes
+    assert ("posture_not_sensed", 0) in codes
+    assert ("seat_position_not_sensed", 0) in codes
+    for a in r.json()["assumptions"]:
+        assert a["message"]

@@ -38,3 +38,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     card = write_model_card(fit, args.out or default_report_dir())
     sys.stderr.write(f"artifact: {path}\nmodel card: {card}\n")
     return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

@@ -624,8 +624,14 @@ def is_current(
 
 def write_manifest(directory: Path, config: BuildConfig) -> dict[str, Any]:
     """Write ``manifest.json``: library identity, checks and each file's SHA-256."""
+    from models.lpm.params import load_parameter_set
+    from models.surrogate.golden import golden_record
+    from models.surrogate.spec import FAMILIES
+
     checks = _checks()
     files = {p.name: sha256_file(p) for p in sorted(directory.glob("*.npz"))}
+    built = {f[:-4] for f in files}
+    golden = golden_record([s for s in FAMILIES if s.name in built], load_parameter_set())
     manifest = {
         "name": "lpm-pce-surrogates",
         "version": f"{FORMAT_VERSION}.{ENGINE_VERSION}",
@@ -634,6 +640,8 @@ def write_manifest(directory: Path, config: BuildConfig) -> dict[str, Any]:
         "config": asdict(config),
         "families": sorted(f[:-4] for f in files),
         "files": files,
+        # what the families depend on, rerun by the service at start
+        "golden": golden,
         **checks,
     }
     write_json(directory / MANIFEST_NAME, manifest)

@@ -31,7 +31,40 @@ from models.surrogate.evaluate import SurrogateLibrary, default_artifact_dir
 from models.surrogate.spec import FAMILIES
 from models.surrogate.store import write_json
 
-__all__ = ["main"]
+__all__ = ["main", "restamp"]
+
+
+def restamp(directory: Path) -> int:
+    """Record the golden cases and parameter checksum anew, when the physics is unchanged.
+
+    For a change that keeps every answer (a refactor, the vehicle interior moved
+    from code into the parameter file): the recorded golden cases must still
+    hold, except for the parameter-values checksum itself. Any other file of the
+    library is left as it is.
+    """
+    import json
+
+    from models.lpm.params import load_parameter_set
+    from models.surrogate.golden import golden_mismatch, golden_record
+    from models.surrogate.store import MANIFEST_NAME
+
+    path = directory / MANIFEST_NAME
+    manifest = json.loads(path.read_text(encoding="utf-8"))
+    golden = manifest.get("golden")
+    if not golden:
+        sys.stderr.write("the manifest records no golden cases: rebuild the surrogates\n")
+        return 2
+    params = load_parameter_set()
+    check = {**golden, "parameter_values_sha256": params.values_sha256}
+    reason = golden_mismatch(check, {s.name: s for s in FAMILIES}, params)
+    if reason is not None:
+        sys.stderr.write(f"not restamped: {reason}; rebuild the surrogates\n")
+        return 1
+    built = [s for s in FAMILIES if s.name in manifest["families"]]
+    manifest["golden"] = golden_record(built, params)
+    write_json(path, manifest)
+    sys.stderr.write(f"restamped {path}: the golden cases hold\n")
+    return 0
 
 
 def _worker_init() -> None:
@@ -67,6 +100,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         "--family", action="append", default=[], help="rebuild this family (repeatable)"
     )
     ap.add_argument("--force", action="store_true", help="rebuild every family")
+    ap.add_argument(
+        "--restamp",
+        action="store_true",
+        help="rewrite the manifest's golden cases and parameter checksum after a change that "
+        "keeps the physics (refused unless the recorded golden cases still hold)",
+    )
     ap.add_argument("--workers", type=int, default=os.cpu_count() or 1)
     ap.add_argument("--out", type=Path, default=None, help="artifact directory (the shipped one)")
     ap.add_argument(
@@ -89,6 +128,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     ap.add_argument("--seed", type=int, default=d.seed)
     ap.add_argument("--no-report", action="store_true")
     args = ap.parse_args(list(argv) if argv is not None else None)
+    if args.restamp:
+        return restamp(args.out or default_artifact_dir())
     config = replace(d, n_holdout=args.n_holdout, n_boot=args.n_boot, seed=args.seed)
     if args.n_train is not None:
         config = replace(config, n_train=args.n_train, n_train_by_mode=())

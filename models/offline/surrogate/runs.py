@@ -9,13 +9,14 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
 from models.impact_mode import ImpactMode
+from models.surrogate.golden import PULSE_RATE_HZ, SIMULATED_S, family_outputs, family_run
 from models.surrogate.spec import FamilySpec
 
 __all__ = [
@@ -34,19 +35,6 @@ FloatArray = npt.NDArray[np.float64]
 
 #: An ISS15+ decision from a probability: P(ISS >= 15) >= 0.5 (the more likely class).
 ISS15_DECISION_PROBABILITY = 0.5
-
-
-#: Sampling rate of the haversine pulses fed to the LPM, Hz (the service's
-#: models.pulse.DEFAULT_OUTPUT_RATE_HZ).
-PULSE_RATE_HZ = 10_000.0
-
-
-#: Simulated duration, s (models.lpm.simulate default).
-SIMULATED_S = 0.2
-
-
-#: Mode axis (deg clockwise) for an occupant on the right (models.impact_mode).
-_AXIS_DEG = {"frontal": 0.0, "near_side": 90.0, "rear": 180.0, "far_side": 270.0}
 
 
 @dataclass(frozen=True)
@@ -81,6 +69,9 @@ def lpm_outputs(
 def lpm_runs(spec: FamilySpec, x: npt.ArrayLike, params: Any = None) -> LpmRuns:
     """Direct LPM runs at raw input points of a family.
 
+    Each run is :func:`models.surrogate.golden.family_run` (the haversine pulse
+    along the PDOF that the service's golden cases use too).
+
     Parameters
     ----------
     spec : FamilySpec
@@ -93,61 +84,22 @@ def lpm_runs(spec: FamilySpec, x: npt.ArrayLike, params: Any = None) -> LpmRuns:
     -------
     LpmRuns
     """
-    from models.impact_mode import ImpactMode
     from models.lpm.params import load_parameter_set
-    from models.lpm.simulate import head_clearance_mm, simulate
-    from models.notification import AirbagState, Occupant, Seat
-    from models.pulse import STANDARD_GRAVITY, haversine
+    from models.lpm.simulate import head_clearance_mm
 
     ps = load_parameter_set() if params is None else params
-    occ0 = Occupant(
-        seat=Seat.DRIVER,
-        body=spec.body,
-        belted=spec.belted,
-        frontal_airbag=(
-            AirbagState.DEPLOYED
-            if spec.mode is ImpactMode.FRONTAL and spec.airbag_deployed
-            else AirbagState.NOT_DEPLOYED
-        ),
-        side_airbag=(
-            AirbagState.DEPLOYED
-            if spec.mode is ImpactMode.NEAR_SIDE and spec.airbag_deployed
-            else AirbagState.ABSENT
-        ),
-    )
     xv = np.atleast_2d(np.asarray(x, dtype=np.float64))
-    t = np.arange(int(round(SIMULATED_S * PULSE_RATE_HZ)) + 1) / PULSE_RATE_HZ
     y = np.full((xv.shape[0], len(spec.outputs)), np.nan)
     status = np.zeros(xv.shape[0], dtype=np.int64)
     clearance = np.full(xv.shape[0], np.nan)
-    for i, (dv, ang, posture, seat, dur) in enumerate(xv):
-        tsec = dur / 1000.0
-        amp = 2.0 * (dv / 3.6) / (STANDARD_GRAVITY * tsec)
-        pdof = np.radians(_AXIS_DEG[spec.mode.value] + ang)
-        h = haversine(t, amp, tsec)
-        occ = replace(occ0, posture_lumbar_flexion_deg=float(posture), seat_track_mm=float(seat))
-        r = simulate(
-            t,
-            -np.cos(pdof) * h,
-            -np.sin(pdof) * h,
-            spec.mode,
-            occ,
-            ps,
-            angle_deg=float(ang),
-            duration_s=SIMULATED_S,
-        )
+    for i, point in enumerate(xv):
+        r = family_run(spec, point, ps)
         status[i] = r.status
         if r.status < 0 or r.assessment is None:
             continue
         clearance[i] = head_clearance_mm(r)
-        for j, name in enumerate(spec.outputs):
-            if name == "p_iss15":
-                y[i, j] = r.assessment.p_iss15
-            elif name == "iss":
-                y[i, j] = r.assessment.iss
-            else:
-                v = getattr(r.measures, name)
-                y[i, j] = np.nan if v is None else float(v)
+        outputs = family_outputs(spec, r)
+        y[i] = [outputs[name] for name in spec.outputs]
     return LpmRuns(y, status, clearance)
 
 

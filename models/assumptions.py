@@ -1,0 +1,132 @@
+"""What the engine assumed, clamped or could not do: each with a code an integrator can act on.
+
+Every answer lists its assumptions as :class:`Assumption` (a stable
+:class:`AssumptionCode`, the occupant it concerns, and a sentence for people).
+The codes are part of the contract: a call center can, say, ask the caller for
+an occupant's age when it sees ``age_imputed``, or show a rollover warning. The
+table of codes is :data:`DESCRIPTIONS` (published in the OpenAPI document and
+in ``docs/api.md``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from enum import StrEnum
+from typing import Final
+
+__all__ = ["DESCRIPTIONS", "Assumption", "AssumptionCode"]
+
+
+class AssumptionCode(StrEnum):
+    """Stable codes of the engine's assumptions (see :data:`DESCRIPTIONS`)."""
+
+    BODY_UNKNOWN = "body_unknown"
+    BODY_FROM_STATURE_MASS = "body_from_stature_mass"
+    ROLLOVER_REPORTED = "rollover_reported"
+    MULTIPLE_IMPACTS_REPORTED = "multiple_impacts_reported"
+    AGE_IMPUTED = "age_imputed"
+    BMI_IMPUTED = "bmi_imputed"
+    DELTA_V_EXTRAPOLATED = "delta_v_extrapolated"
+    SECOND_ROW_SEAT = "second_row_seat"
+    OUTSIDE_OCCUPANT_MODEL_COVERAGE = "outside_occupant_model_coverage"
+    OCCUPANT_MODEL_FAILED = "occupant_model_failed"
+    POSTURE_NOT_SENSED = "posture_not_sensed"
+    SEAT_POSITION_NOT_SENSED = "seat_position_not_sensed"
+    SEAT_TRACK_SWITCH = "seat_track_switch"
+    POSTURE_CLAMPED = "posture_clamped"
+    SEAT_TRACK_CLAMPED = "seat_track_clamped"
+    SIDE_AIRBAG_NOT_REPORTED = "side_airbag_not_reported"
+    SPREAD_MEAN = "occupant_model_spread_mean"
+    SURROGATE_UNAVAILABLE = "surrogate_unavailable"
+    OUTSIDE_SURROGATE_DESIGN = "outside_surrogate_design"
+    POINT_OUTSIDE_INTERVAL = "point_outside_interval"
+
+
+#: What each code means and what an integrator may do about it.
+DESCRIPTIONS: Final[dict[AssumptionCode, str]] = {
+    AssumptionCode.BODY_UNKNOWN: (
+        "No body class, stature or mass: the occupant models used the Hybrid III 50th "
+        "male. Send stature and mass when known."
+    ),
+    AssumptionCode.BODY_FROM_STATURE_MASS: (
+        "The body class was chosen from stature and mass (the nearer Hybrid III dummy)."
+    ),
+    AssumptionCode.ROLLOVER_REPORTED: (
+        "A rollover was reported: the decided probability is that of a rollover (in the field "
+        "data); the occupant models see only the planar pulse."
+    ),
+    AssumptionCode.MULTIPLE_IMPACTS_REPORTED: (
+        "Multiple impacts were reported: the decided probability includes them; the occupant "
+        "models run the recorded pulse as one event."
+    ),
+    AssumptionCode.AGE_IMPUTED: (
+        "Age unknown: the field model used the calibration median. Ask the caller and resend."
+    ),
+    AssumptionCode.BMI_IMPUTED: (
+        "Stature or mass unknown: the field model used the calibration median body mass index."
+    ),
+    AssumptionCode.DELTA_V_EXTRAPOLATED: (
+        "Delta-V above the field model's calibration data: its probability is extrapolated."
+    ),
+    AssumptionCode.SECOND_ROW_SEAT: (
+        "A second-row seat: the field model decides; the occupant models are of the front row."
+    ),
+    AssumptionCode.OUTSIDE_OCCUPANT_MODEL_COVERAGE: (
+        "The PDOF lies between the occupant models' ranges: the field model decides without "
+        "an occupant-model explanation."
+    ),
+    AssumptionCode.OCCUPANT_MODEL_FAILED: (
+        "The occupant model failed for this occupant: the field model decides without its "
+        "explanation."
+    ),
+    AssumptionCode.POSTURE_NOT_SENSED: (
+        "No posture reading: the occupant model's intervals span the whole posture range."
+    ),
+    AssumptionCode.SEAT_POSITION_NOT_SENSED: (
+        "No seat position reading: the intervals span the whole seat track."
+    ),
+    AssumptionCode.SEAT_TRACK_SWITCH: (
+        "Only the EDR seat track switch: the seat is in the part of the track it indicates."
+    ),
+    AssumptionCode.POSTURE_CLAMPED: "A posture outside the occupant models' range was clamped.",
+    AssumptionCode.SEAT_TRACK_CLAMPED: (
+        "A seat track outside the occupant models' range was clamped."
+    ),
+    AssumptionCode.SIDE_AIRBAG_NOT_REPORTED: (
+        "Side airbag state not reported for a near-side occupant: none assumed (the "
+        "conservative choice). Send `side_airbag` when known."
+    ),
+    AssumptionCode.SPREAD_MEAN: (
+        "Posture or seat position not sensed: the occupant models' P(ISS >= 15) is the mean "
+        "over the spread its interval propagates."
+    ),
+    AssumptionCode.SURROGATE_UNAVAILABLE: (
+        "No surrogate for this configuration: the occupant model's intervals come from direct "
+        "runs over the sensor box."
+    ),
+    AssumptionCode.OUTSIDE_SURROGATE_DESIGN: (
+        "The crash is outside the surrogates' design range: the occupant model's intervals "
+        "come from direct runs over the sensor box."
+    ),
+    AssumptionCode.POINT_OUTSIDE_INTERVAL: (
+        "The direct occupant-model estimate lies outside the surrogate's 95 % interval."
+    ),
+}
+
+
+@dataclass(frozen=True)
+class Assumption:
+    """One assumption of an answer.
+
+    Attributes
+    ----------
+    code : AssumptionCode
+    message : str
+        The assumption in words, with its numbers.
+    occupant : int or None
+        Index of the occupant it concerns; None for the whole notification.
+    """
+
+    code: AssumptionCode
+    message: str
+    occupant: int | None = None
