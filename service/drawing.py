@@ -11,6 +11,10 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import numpy.typing as npt
 
 __all__ = [
     "BODY_REGIONS",
@@ -31,7 +35,7 @@ __all__ = [
 # ------------------------------------------------------------------ probability bar
 
 #: Width and horizontal padding of the probability bar's viewBox.
-BAR_WIDTH, BAR_PAD = 400.0, 12.0
+BAR_WIDTH, BAR_PAD = 400.0, 18.0
 
 
 @dataclass(frozen=True)
@@ -311,21 +315,27 @@ def _fmt_tick(v: float) -> str:
     return f"{v:g}" if abs(v) >= 1e-9 else "0"
 
 
-def _decimate(t: Sequence[float], y: Sequence[float]) -> list[tuple[float, float]]:
-    """At most MAX_PLOT_POINTS points; buckets keep their minimum and maximum."""
+def _decimate(
+    t: npt.NDArray[np.floating[Any]], y: npt.NDArray[np.float64]
+) -> list[tuple[float, float]]:
+    """At most MAX_PLOT_POINTS points; each bucket keeps its minimum and maximum, in order."""
     n = len(y)
     if n <= MAX_PLOT_POINTS:
-        return list(zip(t, y, strict=True))
+        return list(zip(t.tolist(), y.tolist(), strict=True))
     buckets = MAX_PLOT_POINTS // 2
-    out: list[tuple[float, float]] = []
-    for b in range(buckets):
-        i0, i1 = b * n // buckets, (b + 1) * n // buckets
-        chunk = range(i0, max(i1, i0 + 1))
-        i_min = min(chunk, key=lambda i: y[i])
-        i_max = max(chunk, key=lambda i: y[i])
-        for i in sorted({i_min, i_max}):
-            out.append((t[i], y[i]))
-    return out
+    k = -(-n // buckets)  # samples per bucket, the last one shorter
+    values = np.full(buckets * k, np.nan)
+    values[:n] = y
+    rows = values.reshape(buckets, k)
+    used = ~np.all(np.isnan(rows), axis=1)
+    base = np.arange(buckets)[used] * k
+    i_min = base + np.nanargmin(rows[used], axis=1)
+    i_max = base + np.nanargmax(rows[used], axis=1)
+    first, second = np.minimum(i_min, i_max), np.maximum(i_min, i_max)
+    order = np.column_stack([first, second]).ravel()
+    keep = np.concatenate([[True], order[1:] != order[:-1]])
+    picked = order[keep]
+    return list(zip(t[picked].tolist(), values[picked].tolist(), strict=True))
 
 
 def _plot(
@@ -361,16 +371,15 @@ def _plot(
     )
 
 
-def _finite_list(value: object) -> list[float]:
-    if not isinstance(value, list):
-        return []
-    out = []
-    for v in value:
-        if isinstance(v, int | float) and math.isfinite(v):
-            out.append(float(v))
-        else:
-            return []
-    return out
+def _series(value: object) -> npt.NDArray[np.float64] | None:
+    """A stored series as a float array, or None unless it is a list of finite numbers."""
+    if not isinstance(value, list) or not value:
+        return None
+    try:  # the stored notification passed validation: numbers, checked here in bulk
+        array = np.asarray(value, dtype=np.float64)
+    except (TypeError, ValueError):
+        return None
+    return array if array.ndim == 1 and bool(np.isfinite(array).all()) else None
 
 
 def pulse_plot(pulse: dict[str, object], haversine: dict[str, object] | None = None) -> Plot | None:
@@ -388,10 +397,12 @@ def pulse_plot(pulse: dict[str, object], haversine: dict[str, object] | None = N
     kind = pulse.get("kind")
     if kind == "acceleration":
         rate = pulse.get("sample_rate_hz")
-        lon, lat = _finite_list(pulse.get("longitudinal_g")), _finite_list(pulse.get("lateral_g"))
-        if not isinstance(rate, int | float) or rate <= 0 or not lon or len(lon) != len(lat):
+        lon, lat = _series(pulse.get("longitudinal_g")), _series(pulse.get("lateral_g"))
+        if not isinstance(rate, int | float) or rate <= 0 or lon is None or lat is None:
             return None
-        t = [1000.0 * i / float(rate) for i in range(len(lon))]
+        if len(lon) != len(lat):
+            return None
+        t = 1000.0 * np.arange(len(lon)) / float(rate)
         return _plot(
             [
                 ("longitudinal (x)", "series-x", _decimate(t, lon)),
@@ -403,11 +414,12 @@ def pulse_plot(pulse: dict[str, object], haversine: dict[str, object] | None = N
         )
     if kind == "delta_v":
         interval = pulse.get("interval_ms", 10.0)
-        lon = _finite_list(pulse.get("longitudinal_kmh"))
-        lat = _finite_list(pulse.get("lateral_kmh"))
-        if not isinstance(interval, int | float) or not lon or len(lon) != len(lat):
+        lon, lat = _series(pulse.get("longitudinal_kmh")), _series(pulse.get("lateral_kmh"))
+        if not isinstance(interval, int | float) or lon is None or lat is None:
             return None
-        t = [float(interval) * i for i in range(len(lon))]
+        if len(lon) != len(lat):
+            return None
+        t = float(interval) * np.arange(len(lon))
         return _plot(
             [
                 ("longitudinal (x)", "series-x", _decimate(t, lon)),
