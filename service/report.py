@@ -16,7 +16,7 @@ from __future__ import annotations
 import math
 import re
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
@@ -429,7 +429,6 @@ class CaseView:
     occupants: tuple[OccupantView, ...]
     crash: CrashView
     audit: AuditView
-    notes: tuple[str, ...] = field(default_factory=tuple)
 
 
 _OCCUPANT_PREFIX = re.compile(r"^occupants\[(\d+)\]:\s*")
@@ -445,7 +444,7 @@ def _assumptions(items: Any) -> tuple[list[AssumptionView], dict[int, list[Assum
         code: str | None = None
         occupant: int | None = None
         if isinstance(item, Mapping):
-            text = str(item.get("message") or item.get("text") or "")
+            text = str(item.get("message") or item.get("text") or item.get("code") or "")
             code = str(item["code"]) if item.get("code") is not None else None
             if isinstance(item.get("occupant"), int) and not isinstance(item["occupant"], bool):
                 occupant = item["occupant"]

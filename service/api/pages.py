@@ -65,6 +65,8 @@ _SECURITY_HEADERS = {
     "X-Frame-Options": "DENY",
 }
 _MAX_FORM_FIELDS = 10
+#: Hosts on which browsers keep Secure cookies over plain HTTP.
+_LOOPBACK = frozenset({"localhost", "127.0.0.1", "::1", "[::1]"})
 
 
 def _html(body: str, status: int = 200, *, started: float | None = None) -> HTMLResponse:
@@ -125,8 +127,10 @@ def _login_page(
     next_url: str | None = None,
 ) -> HTMLResponse:
     token = new_login_csrf(ctx.session_secret, now=time.time())
+    plain_http = request.url.scheme != "https" and request.url.hostname not in _LOOPBACK
     body = report.render(
         "login.html",
+        plain_http=plain_http,
         root=_root(request),
         signed_in=False,
         logout_token="",

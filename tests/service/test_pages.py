@@ -338,6 +338,14 @@ def test_sign_in_refuses_forms_without_a_valid_token_or_from_another_site(
     assert SESSION_COOKIE in set_cookies(r)
 
 
+def test_the_sign_in_form_warns_when_served_over_plain_http(api: ApiClient) -> None:
+    # browsers drop Secure cookies over plain HTTP except on localhost
+    assert Page(api.client.get("/v1/session").text).all(id="plain-http")
+    assert not Page(_browser(api).get("/v1/session").text).all(id="plain-http")
+    local = TestClient(api.client.app, base_url="http://127.0.0.1:8000")
+    assert not Page(local.get("/v1/session").text).all(id="plain-http")
+
+
 def test_sign_in_returns_only_to_pages_of_this_service(api: ApiClient) -> None:
     for evil in ("https://evil.example/v1/", "//evil.example/v1/", "/\\evil", "/docs"):
         r = _sign_in(_browser(api), api.keys["auditor"], evil)

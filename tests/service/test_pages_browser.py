@@ -412,7 +412,8 @@ def test_a_submitter_key_cannot_sign_in(chromium: Any, served: Served) -> None:
     tab.page.goto(f"{served.base}/v1/session")
     tab.page.fill("#api_key", served.keys["submitter"])
     tab.page.click("#login button[type=submit]")
-    assert "auditor or admin" in tab.page.locator("#login .alert").inner_text()
+    assert "auditor or admin" in tab.page.locator("#login p[role=alert]").inner_text()
+    assert tab.page.locator("#plain-http").count() == 0, "127.0.0.1 keeps Secure cookies"
     assert not [c for c in context.cookies() if c["name"] == "aacn_session"]
     context.close()
 
