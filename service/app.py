@@ -5,16 +5,20 @@ from __future__ import annotations
 import json
 import logging
 import os
+import secrets
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
+from pathlib import Path
 from typing import Any
 
 from fastapi import FastAPI
 from fastapi.routing import APIRoute
+from fastapi.staticfiles import StaticFiles
+from starlette.responses import Response
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from service import __version__
-from service.api import cases, health
+from service.api import cases, health, pages
 from service.context import ServiceContext, engine_models_for
 from service.db import migrate
 from service.db.session import make_engine, make_sessionmaker
@@ -71,6 +75,29 @@ class BodySizeLimit:
 
 class _TooLarge(Exception):
     pass
+
+
+#: The pages' stylesheet and icon (package data).
+STATIC_DIR = Path(__file__).resolve().parent / "static"
+
+
+class _StaticFiles(StaticFiles):
+    """The pages' static files, not to be sniffed as another type."""
+
+    def file_response(self, *args: Any, **kwargs: Any) -> Response:
+        response = super().file_response(*args, **kwargs)
+        response.headers["X-Content-Type-Options"] = "nosniff"
+        return response
+
+
+def _session_secret(settings: Settings) -> bytes:
+    if settings.session_secret is not None:
+        return settings.session_secret.get_secret_value().encode("utf-8")
+    log.info(
+        "AACN_SESSION_SECRET is not set: browser sessions are signed with a random secret of "
+        "this process (they end at restart and are not shared between processes)"
+    )
+    return secrets.token_bytes(32)
 
 
 def _operation_id(route: APIRoute) -> str:
@@ -140,6 +167,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
             metrics=metrics,
             models=models,
             models_error=error,
+            session_secret=_session_secret(settings),
         )
         try:
             yield {}
@@ -168,4 +196,6 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.add_middleware(BodySizeLimit, max_bytes=settings.max_body_bytes)
     app.include_router(health.router)
     app.include_router(cases.router)
+    app.include_router(pages.router)
+    app.mount("/static", _StaticFiles(directory=STATIC_DIR), name="static")
     return app

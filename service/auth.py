@@ -26,6 +26,8 @@ __all__ = [
     "KEY_PREFIX",
     "Caller",
     "Role",
+    "caller_for_key",
+    "caller_for_key_id",
     "create_api_key",
     "hash_key",
     "require_auditor",
@@ -81,6 +83,20 @@ def create_api_key(sessions: sessionmaker[Session], *, name: str, role: Role) ->
     return row, secret
 
 
+def caller_for_key(sessions: sessionmaker[Session], key: str) -> Caller | None:
+    """The caller of an active API key, or None when it is unknown or revoked."""
+    with sessions() as session:
+        row = repository.find_active_key(session, hash_key(key))
+    return None if row is None else Caller(key_id=row.id, name=row.name, role=Role(row.role))
+
+
+def caller_for_key_id(sessions: sessionmaker[Session], key_id: int) -> Caller | None:
+    """The caller of an active API key by its id (browser sessions), or None."""
+    with sessions() as session:
+        row = repository.get_active_key_by_id(session, key_id)
+    return None if row is None else Caller(key_id=row.id, name=row.name, role=Role(row.role))
+
+
 _bearer = HTTPBearer(auto_error=False, description="API key: `Authorization: Bearer <key>`.")
 
 
@@ -90,12 +106,10 @@ def _authenticate(
 ) -> Caller:
     if credentials is None or credentials.scheme.lower() != "bearer" or not credentials.credentials:
         raise Unauthorized("Send an API key as `Authorization: Bearer <key>`.")
-    sessions: sessionmaker[Session] = request.app.state.ctx.sessions
-    with sessions() as session:
-        row = repository.find_active_key(session, hash_key(credentials.credentials))
-    if row is None:
+    caller = caller_for_key(request.app.state.ctx.sessions, credentials.credentials)
+    if caller is None:
         raise Unauthorized("The API key is unknown or revoked.")
-    return Caller(key_id=row.id, name=row.name, role=Role(row.role))
+    return caller
 
 
 def _require(*roles: Role) -> object:

@@ -40,3 +40,5 @@ class ServiceContext:
     metrics: Metrics
     models: EngineModels | None
     models_error: str | None = None
+    #: Signs the browser session cookies and CSRF tokens (``service.web_auth``).
+    session_secret: bytes = b""

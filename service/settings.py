@@ -5,7 +5,7 @@ from __future__ import annotations
 from functools import lru_cache
 from pathlib import Path
 
-from pydantic import Field
+from pydantic import Field, SecretStr
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
 from models.constants import DEFAULT_POSTURE_SD_DEG, DEFAULT_SEAT_TRACK_SD_MM
@@ -72,6 +72,20 @@ class Settings(BaseSettings):
     )
     numba_cache_dir: Path | None = Field(
         default=None, description="Directory for numba's compiled-kernel cache (NUMBA_CACHE_DIR)."
+    )
+    session_secret: SecretStr | None = Field(
+        default=None,
+        min_length=32,
+        description="Secret (at least 32 characters) that signs the browser session cookies of "
+        "the case pages. None: a random one is generated at start, so sessions end when the "
+        "process restarts and are not shared between processes (set it when running several "
+        "workers or replicas).",
+    )
+    session_ttl_s: int = Field(
+        default=900,
+        ge=60,
+        le=43_200,
+        description="Lifetime of a browser session of the case pages, s (not renewed by use).",
     )
     log_level: str = Field(default="INFO", description="Python logging level.")
     docs_enabled: bool = Field(default=True, description="Serve /docs and /openapi.json.")

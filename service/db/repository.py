@@ -16,6 +16,7 @@ __all__ = [
     "add_api_key",
     "add_case",
     "find_active_key",
+    "get_active_key_by_id",
     "get_api_key_by_name",
     "get_case",
     "get_idempotency_record",
@@ -43,6 +44,10 @@ def find_active_key(session: Session, key_sha256: str) -> ApiKey | None:
     return session.scalar(
         select(ApiKey).where(ApiKey.key_sha256 == key_sha256, ApiKey.revoked_at.is_(None))
     )
+
+
+def get_active_key_by_id(session: Session, key_id: int) -> ApiKey | None:
+    return session.scalar(select(ApiKey).where(ApiKey.id == key_id, ApiKey.revoked_at.is_(None)))
 
 
 def get_api_key_by_name(session: Session, name: str) -> ApiKey | None:

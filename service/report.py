@@ -1,0 +1,796 @@
+"""The dispatcher's case page and case list: view models and rendering.
+
+Everything on a page comes from the stored case (the notification as received,
+the result as answered, the models recorded with it): the engine is never run
+again, so a case decided before a model change shows the numbers and the model
+versions it was decided with. The stored documents are read as plain JSON, not
+through today's wire models, so an older stored shape still renders (for
+instance `assumptions` as strings, or as objects with a `message`).
+
+Templates: ``service/templates/`` (Jinja2, autoescaped); stylesheet
+``service/static/report.css``; drawings: :mod:`service.drawing`.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any
+from urllib.parse import urlencode
+
+from jinja2 import Environment, FileSystemLoader, StrictUndefined, select_autoescape
+from sqlalchemy.orm import Session, sessionmaker
+
+from models.injury.criteria import (
+    FMVSS208_CHEST_A3MS_LIMIT_G,
+    FMVSS208_CHEST_DEFLECTION_LIMIT_MM,
+    FMVSS208_HIC15_LIMIT,
+    FMVSS208_NIJ_LIMIT,
+)
+from models.injury.risk import (
+    VC_TOLERANCE_LAU_VIANO_1986_ABDOMEN,
+    VC_TOLERANCE_LAU_VIANO_1986_CHEST,
+    VC_TOLERANCE_VIANO_1989_ABDOMEN,
+    VC_TOLERANCE_VIANO_1989_CHEST,
+)
+from models.notification import Body
+from service.db import repository
+from service.drawing import (
+    BODY_REGIONS,
+    Bar,
+    CarDiagram,
+    Plot,
+    car_diagram,
+    probability_bar,
+    pulse_plot,
+)
+
+__all__ = [
+    "AuditView",
+    "CaseRecord",
+    "CaseView",
+    "Limit",
+    "ListRow",
+    "build_case_view",
+    "injury_limit",
+    "render",
+]
+
+TEMPLATES_DIR = Path(__file__).resolve().parent / "templates"
+
+#: One environment per process: templates compile once and are cached.
+_ENV = Environment(
+    loader=FileSystemLoader(TEMPLATES_DIR),
+    autoescape=select_autoescape(default=True, default_for_string=True),
+    undefined=StrictUndefined,
+    trim_blocks=True,
+    lstrip_blocks=True,
+    auto_reload=False,
+)
+
+
+def render(template: str, **context: Any) -> str:
+    """Render one template of ``service/templates/``."""
+    return _ENV.get_template(template).render(**context)
+
+
+# ------------------------------------------------------------------ labels
+
+SEAT_LABELS = {
+    "driver": "Driver",
+    "front_passenger": "Front passenger",
+    "rear_left": "Rear left",
+    "rear_middle": "Rear middle",
+    "rear_right": "Rear right",
+}
+BODY_LABELS = {
+    "male_50th": "50th percentile male (Hybrid III 50M)",
+    "female_5th": "5th percentile female (Hybrid III 5F)",
+}
+MODE_LABELS = {
+    "frontal": "frontal",
+    "rear": "rear",
+    "near_side": "near side",
+    "far_side": "far side",
+    "rollover": "rollover",
+}
+AIRBAG_LABELS = {
+    "deployed": "deployed",
+    "not_deployed": "not deployed",
+    "absent": "absent",
+}
+REGION_LABELS = {
+    "head_neck": "Head and neck",
+    "face": "Face",
+    "chest": "Chest",
+    "abdomen": "Abdomen",
+    "extremities": "Extremities",
+    "external": "External (skin)",
+}
+#: AIS severity words (AAAM Abbreviated Injury Scale).
+AIS_WORDS = ("none", "minor", "moderate", "serious", "severe", "critical", "maximal")
+OUTCOME_LABELS = {
+    "MAIS3+": "P(MAIS 3+): at least one serious (AIS 3 or worse) injury. MAIS 3+ is the field "
+    "model's stand-in for ISS 15+ (broader: one AIS 3 injury alone is ISS 9).",
+    "ISS15+": "P(ISS >= 15) attributable to the crash loads, from the occupant models' injury "
+    "measures.",
+    "police_A+K": "P(police-reported incapacitating or fatal injury), the statistical baseline's "
+    "outcome (a proxy for ISS 15+).",
+}
+OUTCOME_SHORT = {"MAIS3+": "MAIS 3+", "ISS15+": "ISS 15+", "police_A+K": "police A+K"}
+
+
+# ------------------------------------------------------------------ injury limits
+
+
+@dataclass(frozen=True)
+class Limit:
+    """A published limit or tolerance of an injury measure, with its source."""
+
+    value: float
+    source: str
+
+
+_VC_FRONTAL_CHEST = "Lau & Viano 1986 frontal tolerance (25 % risk of AIS 4+)"
+_VC_FRONTAL_ABDOMEN = "Lau & Viano 1986 frontal tolerance (25 % risk of AIS 5+)"
+_VC_SIDE = "Viano et al. 1989 lateral tolerance (25 % risk)"
+_SIDE_MODES = frozenset({"near_side", "far_side"})
+
+
+def injury_limit(measure: str, impact_mode: str, body: str) -> Limit | None:
+    """The engine's published limit for a measure, or None where it has none.
+
+    HIC15 and Nij: the FMVSS 208 limits (``models.injury.criteria``). Chest
+    deflection and 3 ms chest acceleration: the FMVSS 208 Hybrid III limits, in
+    frontal and rear modes only (the side modes measure rib deflection, whose
+    limits the engine does not hold). VC: the Lau & Viano frontal and Viano
+    lateral tolerances (``models.injury.risk``). CTI: no limit in the engine.
+    """
+    side = impact_mode in _SIDE_MODES
+    if measure == "hic15":
+        return Limit(FMVSS208_HIC15_LIMIT, "FMVSS 208 (49 CFR 571.208 S6.2)")
+    if measure == "nij":
+        return Limit(FMVSS208_NIJ_LIMIT, "FMVSS 208 (49 CFR 571.208 S6.6)")
+    if measure == "chest_deflection_mm" and not side:
+        try:
+            return Limit(FMVSS208_CHEST_DEFLECTION_LIMIT_MM[Body(body)], "FMVSS 208 Hybrid III")
+        except (ValueError, KeyError):
+            return None
+    if measure == "chest_a3ms_g" and not side:
+        return Limit(FMVSS208_CHEST_A3MS_LIMIT_G, "FMVSS 208 (3 ms clip)")
+    if measure == "chest_vc_m_s":
+        if side:
+            return Limit(VC_TOLERANCE_VIANO_1989_CHEST, _VC_SIDE)
+        return Limit(VC_TOLERANCE_LAU_VIANO_1986_CHEST, _VC_FRONTAL_CHEST)
+    if measure == "abdomen_vc_m_s":
+        if side:
+            return Limit(VC_TOLERANCE_VIANO_1989_ABDOMEN, _VC_SIDE)
+        return Limit(VC_TOLERANCE_LAU_VIANO_1986_ABDOMEN, _VC_FRONTAL_ABDOMEN)
+    return None
+
+
+MEASURE_LABELS = {
+    "hic15": ("HIC15", ""),
+    "nij": ("Nij (neck)", ""),
+    "chest_deflection_mm": ("Chest deflection", "mm"),
+    "chest_vc_m_s": ("Chest viscous criterion", "m/s"),
+    "chest_a3ms_g": ("Chest acceleration, 3 ms", "g"),
+    "chest_cti": ("Combined thoracic index", ""),
+    "abdomen_vc_m_s": ("Abdomen viscous criterion", "m/s"),
+}
+
+
+# ------------------------------------------------------------------ formatting
+
+
+def _map(doc: Mapping[str, Any], key: str) -> Mapping[str, Any]:
+    """A sub-document of a stored document, or an empty one."""
+    value = doc.get(key)
+    return value if isinstance(value, Mapping) else {}
+
+
+def _num(value: Any) -> float | None:
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        return None
+    v = float(value)
+    return v if math.isfinite(v) else None
+
+
+def pct(p: float) -> str:
+    """A probability in percent, one decimal."""
+    return f"{100.0 * p:.1f} %"
+
+
+def fmt(v: float) -> str:
+    """A measure with about three significant figures, never in e-notation."""
+    a = abs(v)
+    if a >= 100:
+        return f"{v:.0f}"
+    if a >= 10:
+        return f"{v:.1f}"
+    if a >= 1:
+        return f"{v:.2f}"
+    return f"{v:.3f}"
+
+
+def parse_time(value: Any) -> datetime | None:
+    """An RFC 3339 text or a datetime, as an aware UTC datetime."""
+    if isinstance(value, datetime):
+        at = value
+    elif isinstance(value, str):
+        try:
+            at = datetime.fromisoformat(value)
+        except ValueError:
+            return None
+    else:
+        return None
+    return at.replace(tzinfo=UTC) if at.tzinfo is None else at.astimezone(UTC)
+
+
+def utc_text(at: datetime | None) -> str:
+    return "unknown" if at is None else at.strftime("%Y-%m-%d %H:%M:%S UTC")
+
+
+def elapsed_text(seconds: float) -> str:
+    """A duration in words: 45 s, 12 min, 2 h 05 min, 3 d 4 h."""
+    s = int(abs(seconds))
+    if s < 90:
+        return f"{s} s"
+    if s < 90 * 60:
+        return f"{round(s / 60)} min"
+    if s < 48 * 3600:
+        return f"{s // 3600} h {(s % 3600) // 60:02d} min"
+    return f"{s // 86400} d {(s % 86400) // 3600} h"
+
+
+# ------------------------------------------------------------------ view models
+
+
+@dataclass(frozen=True)
+class CaseRecord:
+    """A stored case as read from the audit store (plain JSON documents)."""
+
+    case_id: str
+    event_id: str
+    client_name: str
+    received_at: datetime
+    stored_at: datetime
+    request_sha256: str
+    engine_version: str
+    notification: Mapping[str, Any]
+    result: Mapping[str, Any]
+    models: Mapping[str, Any]
+
+
+@dataclass(frozen=True)
+class DecisionView:
+    """One decision (`triage`, `occupant_model` or `baseline`) ready to show."""
+
+    flagged: bool
+    headline: str
+    recommendation: str
+    probability: float
+    low: float
+    high: float
+    threshold: float
+    outcome: str
+    outcome_short: str
+    outcome_text: str
+    model: str
+    operating_point: str | None
+    bar: Bar
+
+    @property
+    def probability_text(self) -> str:
+        return pct(self.probability)
+
+    @property
+    def interval_text(self) -> str:
+        return f"{pct(self.low)} to {pct(self.high)}"
+
+    @property
+    def threshold_text(self) -> str:
+        return pct(self.threshold)
+
+
+def decision_view(triage: Mapping[str, Any] | None) -> DecisionView | None:
+    if not isinstance(triage, Mapping):
+        return None
+    p = _num(triage.get("probability"))
+    threshold = _num(triage.get("threshold"))
+    ci = triage.get("probability_ci95")
+    if p is None or threshold is None:
+        return None
+    low, high = p, p
+    if isinstance(ci, Sequence) and len(ci) == 2:
+        low, high = _num(ci[0]) or 0.0, _num(ci[1]) or 0.0
+    flagged = bool(triage.get("iss15_plus"))
+    outcome = str(triage.get("outcome") or "")
+    return DecisionView(
+        flagged=flagged,
+        headline="Trauma center" if flagged else "No trauma-center indication",
+        recommendation=str(triage.get("recommendation") or ""),
+        probability=p,
+        low=low,
+        high=high,
+        threshold=threshold,
+        outcome=outcome,
+        outcome_short=OUTCOME_SHORT.get(outcome, outcome or "probability"),
+        outcome_text=OUTCOME_LABELS.get(outcome, outcome),
+        model=str(triage.get("model") or ""),
+        operating_point=triage.get("operating_point"),
+        bar=probability_bar(p, low, high, threshold),
+    )
+
+
+@dataclass(frozen=True)
+class MeasureRow:
+    key: str
+    label: str
+    unit: str
+    value: float
+    value_text: str
+    ci_text: str
+    limit: Limit | None
+    limit_text: str
+    ratio: float | None
+    #: Width of the value's bar in a 0-120 viewBox where the limit sits at 80.
+    bar_width: float
+    over: bool
+
+
+@dataclass(frozen=True)
+class RegionView:
+    key: str
+    label: str
+    ais: int
+    severity: str
+
+    @property
+    def css(self) -> str:
+        return f"ais-{min(self.ais, 6)}"
+
+
+@dataclass(frozen=True)
+class AssumptionView:
+    text: str
+    code: str | None = None
+
+
+@dataclass(frozen=True)
+class OccupantView:
+    index: int
+    seat: str
+    seat_label: str
+    body_label: str
+    age_text: str
+    sex_text: str
+    restraints: tuple[tuple[str, str], ...]
+    method: str
+    method_text: str
+    impact_mode: str
+    field_mode: str
+    impact_angle_text: str
+    decision: DecisionView | None
+    occupant_model: DecisionView | None
+    baseline: DecisionView | None
+    regions: tuple[RegionView, ...]
+    iss_estimate: int | None
+    iss_text: str
+    measures: tuple[MeasureRow, ...]
+    sensor_text: str
+    assumptions: tuple[AssumptionView, ...]
+
+    @property
+    def region_ais(self) -> dict[str, int]:
+        return {r.key: r.ais for r in self.regions}
+
+
+@dataclass(frozen=True)
+class CrashView:
+    pulse_kind: str
+    delta_v_kmh: float | None
+    facts: tuple[tuple[str, str], ...]
+    pdof_deg: float | None
+    diagram: CarDiagram | None
+    plot: Plot | None
+    multiple_impacts: str
+    rollover: str
+    assumptions: tuple[AssumptionView, ...]
+
+
+@dataclass(frozen=True)
+class AuditView:
+    case_id: str
+    event_id: str
+    client_name: str
+    received_text: str
+    stored_text: str
+    request_sha256: str
+    engine_version: str
+    models: tuple[tuple[str, str, str], ...]
+    timings: tuple[tuple[str, str], ...]
+
+
+@dataclass(frozen=True)
+class CaseView:
+    case_id: str
+    event_id: str
+    decision: DecisionView | None
+    occurred_text: str
+    received_text: str
+    since_crash_text: str
+    delay_text: str
+    rendered_text: str
+    occupants: tuple[OccupantView, ...]
+    crash: CrashView
+    audit: AuditView
+
+
+_OCCUPANT_PREFIX = re.compile(r"^occupants\[(\d+)\]:\s*")
+
+
+def _assumptions(items: Any) -> tuple[list[AssumptionView], dict[int, list[AssumptionView]]]:
+    """Case-level and per-occupant assumptions; each item a string or ``{code, message}``."""
+    case_level: list[AssumptionView] = []
+    per_occupant: dict[int, list[AssumptionView]] = {}
+    if not isinstance(items, list):
+        return case_level, per_occupant
+    for item in items:
+        code: str | None = None
+        occupant: int | None = None
+        if isinstance(item, Mapping):
+            text = str(item.get("message") or item.get("text") or item.get("code") or "")
+            code = str(item["code"]) if item.get("code") is not None else None
+            if isinstance(item.get("occupant"), int) and not isinstance(item["occupant"], bool):
+                occupant = item["occupant"]
+        else:
+            text = str(item)
+        match = _OCCUPANT_PREFIX.match(text)
+        if match:
+            occupant = int(match.group(1)) if occupant is None else occupant
+            text = text[match.end() :]
+        view = AssumptionView(text=text, code=code)
+        if occupant is None:
+            case_level.append(view)
+        else:
+            per_occupant.setdefault(occupant, []).append(view)
+    return case_level, per_occupant
+
+
+def _measure_rows(occ: Mapping[str, Any]) -> tuple[MeasureRow, ...]:
+    measures = _map(occ, "measures")
+    cis = _map(occ, "measures_ci95")
+    mode, body = str(occ.get("impact_mode") or ""), str(occ.get("body") or "")
+    rows = []
+    for key, raw in measures.items():
+        value = _num(raw)
+        if value is None:
+            continue
+        label, unit = MEASURE_LABELS.get(key, (key, ""))
+        if key == "chest_deflection_mm" and mode in _SIDE_MODES:
+            label = "Rib deflection"
+        ci = cis.get(key)
+        ci_text = "-"
+        if isinstance(ci, Sequence) and len(ci) == 2 and None not in (_num(ci[0]), _num(ci[1])):
+            ci_text = f"{fmt(float(ci[0]))} to {fmt(float(ci[1]))}"
+        limit = injury_limit(key, mode, body)
+        ratio = value / limit.value if limit is not None and limit.value > 0 else None
+        rows.append(
+            MeasureRow(
+                key=key,
+                label=label,
+                unit=unit,
+                value=value,
+                value_text=fmt(value),
+                ci_text=ci_text,
+                limit=limit,
+                limit_text=(fmt(limit.value) + (f" {unit}" if unit else "")) if limit else "none",
+                ratio=ratio,
+                bar_width=round(min(max(ratio, 0.0), 1.5) * 80.0, 1) if ratio is not None else 0,
+                over=ratio is not None and ratio >= 1.0,
+            )
+        )
+    return tuple(rows)
+
+
+def _method_text(occ: Mapping[str, Any]) -> str:
+    mode = MODE_LABELS.get(str(occ.get("impact_mode")), str(occ.get("impact_mode")))
+    if occ.get("method") == "lpm":
+        return (
+            f"Occupant model: the {mode} occupant model ran on the crash pulse; its injury "
+            "measures explain the decision."
+        )
+    seat = str(occ.get("seat") or "")
+    if seat.startswith("rear"):
+        why = "a second-row seat; the occupant models are of the front row"
+    elif not occ.get("in_lpm_coverage", False):
+        why = "the direction of force lies outside the occupant models' ranges"
+    else:
+        why = "the occupant model could not answer"
+    return f"Statistical: no occupant model for this occupant ({why})."
+
+
+def _restraints(given: Mapping[str, Any]) -> tuple[tuple[str, str], ...]:
+    def state(key: str) -> str:
+        v = given.get(key)
+        return "not reported" if v is None else AIRBAG_LABELS.get(str(v), str(v))
+
+    def flag(key: str, yes: str, no: str) -> str:
+        v = given.get(key)
+        return "not reported" if v is None else (yes if v else no)
+
+    out = [
+        ("Seat belt", flag("belted", "fastened", "NOT fastened")),
+        ("Frontal airbag", state("frontal_airbag")),
+        ("Side and curtain airbags", state("side_airbag")),
+        ("Belt pretensioner", flag("pretensioner_fired", "fired", "not fired")),
+    ]
+    fire = _num(given.get("airbag_fire_time_ms"))
+    if fire is not None:
+        out.append(("Airbag fired at", f"{fire:g} ms"))
+    return tuple(out)
+
+
+def _occupant_view(
+    index: int,
+    occ: Mapping[str, Any],
+    given: Mapping[str, Any],
+    assumptions: list[AssumptionView],
+) -> OccupantView:
+    seat = str(occ.get("seat") or given.get("seat") or "")
+    body = str(occ.get("body") or "")
+    age = _num(given.get("age_years"))
+    region_ais = occ.get("region_ais")
+    regions: tuple[RegionView, ...] = ()
+    if isinstance(region_ais, Mapping):
+        regions = tuple(
+            RegionView(
+                key=str(key),
+                label=REGION_LABELS.get(str(key), str(key)),
+                ais=int(ais),
+                severity=AIS_WORDS[min(max(int(ais), 0), 6)],
+            )
+            for key, ais in region_ais.items()
+            if isinstance(ais, int) and not isinstance(ais, bool)
+        )
+    iss = _map(occ, "iss")
+    iss_estimate = iss.get("estimate")
+    iss_text = "not available (no occupant model)"
+    if isinstance(iss_estimate, int):
+        iss_text = str(iss_estimate)
+        ci = iss.get("ci95")
+        if isinstance(ci, Sequence) and len(ci) == 2 and None not in (_num(ci[0]), _num(ci[1])):
+            iss_text += f" (95 % interval {float(ci[0]):.0f} to {float(ci[1]):.0f})"
+    sensors = _map(occ, "sensor_inputs")
+    sensor_text = ""
+    if sensors:
+        posture, seat_mm = _num(sensors.get("posture_deg")), _num(sensors.get("seat_track_mm"))
+        p_sd, s_sd = _num(sensors.get("posture_sd_deg")), _num(sensors.get("seat_track_sd_mm"))
+        if None not in (posture, seat_mm, p_sd, s_sd):
+            sensor_text = (
+                f"Computed at lumbar flexion {posture:.1f} deg (SD {p_sd:.1f}) and seat track "
+                f"{seat_mm:+.0f} mm from mid track (SD {s_sd:.0f} mm)."
+            )
+    angle = _num(occ.get("impact_angle_deg"))
+    return OccupantView(
+        index=index,
+        seat=seat,
+        seat_label=SEAT_LABELS.get(seat, seat),
+        body_label=BODY_LABELS.get(body, body or "unknown"),
+        age_text=f"{age:g} years" if age is not None else "age not reported",
+        sex_text=str(given.get("sex") or "sex not reported"),
+        restraints=_restraints(given),
+        method=str(occ.get("method") or ""),
+        method_text=_method_text(occ),
+        impact_mode=MODE_LABELS.get(str(occ.get("impact_mode")), str(occ.get("impact_mode"))),
+        field_mode=MODE_LABELS.get(str(occ.get("field_mode")), str(occ.get("field_mode"))),
+        impact_angle_text=f"{angle:+.0f} deg from the mode's axis" if angle is not None else "",
+        decision=decision_view(occ.get("triage")),
+        occupant_model=decision_view(occ.get("occupant_model")),
+        baseline=decision_view(occ.get("baseline")),
+        regions=regions,
+        iss_estimate=iss_estimate if isinstance(iss_estimate, int) else None,
+        iss_text=iss_text,
+        measures=_measure_rows(occ),
+        sensor_text=sensor_text,
+        assumptions=tuple(assumptions),
+    )
+
+
+def _yes_no(value: Any) -> str:
+    return "not reported" if value is None else ("YES" if value else "no")
+
+
+def _crash_view(
+    notification: Mapping[str, Any],
+    result: Mapping[str, Any],
+    occupants: Sequence[OccupantView],
+    assumptions: list[AssumptionView],
+) -> CrashView:
+    crash = _map(notification, "crash")
+    sent = _map(crash, "pulse")
+    derived = _map(result, "pulse")
+    vehicle = _map(notification, "vehicle")
+    kind = str(sent.get("kind") or "unknown")
+    facts: list[tuple[str, str]] = []
+    dv = _num(derived.get("delta_v_kmh"))
+    pdof = _num(derived.get("pdof_deg"))
+    if dv is not None:
+        facts.append(("Delta-V (resultant)", f"{dv:.1f} km/h"))
+    lon = _num(derived.get("delta_v_longitudinal_kmh"))
+    lat = _num(derived.get("delta_v_lateral_kmh"))
+    if lon is not None and lat is not None:
+        facts.append(("Delta-V x / y", f"{lon:+.1f} / {lat:+.1f} km/h"))
+    if pdof is not None:
+        facts.append(("PDOF", f"{pdof:.0f} deg clockwise from straight ahead"))
+    peak, duration = _num(derived.get("peak_accel_g")), _num(derived.get("duration_ms"))
+    if peak is not None:
+        facts.append(("Peak acceleration", f"{peak:.1f} g"))
+    if duration is not None:
+        facts.append(("Pulse duration", f"{duration:.0f} ms"))
+    facts.append(
+        (
+            "Pulse sent as",
+            {
+                "summary": "summary (delta-V and PDOF)",
+                "delta_v": "EDR delta-V record",
+                "acceleration": "acceleration samples",
+            }.get(kind, kind),
+        )
+    )
+    facts.append(
+        (
+            "Vehicle",
+            f"{vehicle.get('model', 'compact_sedan')}, "
+            f"{vehicle.get('drive_side', 'left')}-hand drive",
+        )
+    )
+    haversine = _map(derived, "haversine")
+    diagram = None
+    if pdof is not None:
+        diagram = car_diagram(
+            pdof,
+            str(vehicle.get("drive_side", "left")),
+            [(o.seat, bool(o.decision and o.decision.flagged), o.seat_label) for o in occupants],
+        )
+    return CrashView(
+        pulse_kind=kind,
+        delta_v_kmh=dv,
+        facts=tuple(facts),
+        pdof_deg=pdof,
+        diagram=diagram,
+        plot=pulse_plot(dict(sent), dict(haversine) or None),
+        multiple_impacts=_yes_no(crash.get("multiple_impacts")),
+        rollover=_yes_no(crash.get("rollover")),
+        assumptions=tuple(assumptions),
+    )
+
+
+def build_case_view(record: CaseRecord, *, now: datetime) -> CaseView:
+    """The case page's view of a stored case (nothing is recomputed)."""
+    result, notification = record.result, record.notification
+    case_level, per_occupant = _assumptions(result.get("assumptions"))
+    given_list = notification.get("occupants")
+    given_list = given_list if isinstance(given_list, list) else []
+    occupants = tuple(
+        _occupant_view(
+            i,
+            occ,
+            given_list[i] if i < len(given_list) and isinstance(given_list[i], Mapping) else {},
+            per_occupant.get(i, []),
+        )
+        for i, occ in enumerate(result.get("occupants") or [])
+        if isinstance(occ, Mapping)
+    )
+    occurred = parse_time(notification.get("occurred_at"))
+    since = delay = "unknown"
+    if occurred is not None:
+        seconds = (now - occurred).total_seconds()
+        since = (
+            f"{elapsed_text(seconds)} since the crash"
+            if seconds >= 0
+            else f"the crash time is {elapsed_text(seconds)} after now: check the sender's clock"
+        )
+        delay = elapsed_text((record.received_at - occurred).total_seconds())
+    models = tuple(
+        (str(name), str(m.get("version", "")), str(m.get("sha256", "")))
+        for name, m in sorted(record.models.items())
+        if isinstance(m, Mapping)
+    )
+    timings = _map(result, "timings_ms")
+    audit = AuditView(
+        case_id=record.case_id,
+        event_id=record.event_id,
+        client_name=record.client_name,
+        received_text=utc_text(record.received_at),
+        stored_text=utc_text(record.stored_at),
+        request_sha256=record.request_sha256,
+        engine_version=record.engine_version,
+        models=models,
+        timings=tuple((str(k), f"{v:.1f} ms") for k, v in timings.items() if _num(v) is not None),
+    )
+    return CaseView(
+        case_id=record.case_id,
+        event_id=record.event_id,
+        decision=decision_view(result.get("triage")),
+        occurred_text=utc_text(occurred),
+        received_text=utc_text(record.received_at),
+        since_crash_text=since,
+        delay_text=delay,
+        rendered_text=utc_text(now),
+        occupants=occupants,
+        crash=_crash_view(notification, result, occupants, case_level),
+        audit=audit,
+    )
+
+
+# ------------------------------------------------------------------ case list
+
+
+@dataclass(frozen=True)
+class ListRow:
+    case_id: str
+    event_id: str
+    client_name: str
+    received_text: str
+    flagged: bool
+    probability: float
+    probability_text: str
+    impact_modes: str
+
+
+def list_rows(items: Sequence[Any]) -> tuple[ListRow, ...]:
+    """Rows of the case list from ``CaseSummary`` items."""
+    return tuple(
+        ListRow(
+            case_id=c.case_id,
+            event_id=c.event_id,
+            client_name=c.client_name,
+            received_text=utc_text(c.received_at),
+            flagged=c.iss15_plus,
+            probability=c.probability,
+            probability_text=pct(c.probability),
+            impact_modes=", ".join(MODE_LABELS.get(m, m) for m in c.impact_modes),
+        )
+        for c in items
+    )
+
+
+def query_string(params: Mapping[str, str | None]) -> str:
+    """``?a=1&b=2`` of the non-empty parameters, or empty."""
+    kept = {k: v for k, v in params.items() if v not in (None, "")}
+    return "?" + urlencode(kept) if kept else ""
+
+
+# ------------------------------------------------------------------ use cases
+
+
+def load_case_record(sessions: sessionmaker[Session], case_id: str) -> CaseRecord | None:
+    """The stored case as plain documents, or None (one read, no engine)."""
+    with sessions() as session:
+        case = repository.get_case(session, case_id)
+        if case is None:
+            return None
+        return CaseRecord(
+            case_id=case.id,
+            event_id=case.event_id,
+            client_name=case.client_name,
+            received_at=case.received_at,
+            stored_at=case.stored_at,
+            request_sha256=case.request_sha256,
+            engine_version=case.engine_version,
+            notification=case.notification,
+            result=case.result,
+            models=case.models,
+        )
+
+
+def case_page(record: CaseRecord, *, now: datetime, chrome: Mapping[str, Any]) -> str:
+    """The HTML of the case page of a stored case."""
+    view = build_case_view(record, now=now)
+    return render("case.html", view=view, body_regions=BODY_REGIONS, **chrome)

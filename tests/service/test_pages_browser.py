@@ -1,0 +1,456 @@
+"""The case pages in a real browser: headless Chromium driven by Playwright.
+
+The service runs as a real process (``python -m service.cli serve`` on a free
+port, a temporary SQLite file, keys made with ``keys create``), real cases are
+POSTed to it, and Chromium signs in through the form like a dispatcher would.
+
+Chromium: ``$AACN_TEST_CHROMIUM``, else Debian's ``chromium`` on the PATH, else
+a Playwright-managed build. These tests are skipped, with the reason, only when
+none of them can be started. A screenshot of each page goes to
+``test-artifacts/screenshots/`` (or ``$AACN_TEST_ARTIFACTS/screenshots/``).
+"""
+
+from __future__ import annotations
+
+import os
+import secrets
+import shutil
+import socket
+import subprocess
+import sys
+import time
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import httpx2 as httpx
+import pytest
+
+from tests.service.pages_support import (
+    acceleration,
+    head_injury,
+    minor,
+    rear_seat_rollover,
+    side_edr,
+)
+
+pytestmark = pytest.mark.browser
+
+#: Flags for Chromium on a closed network and as root in a container: no
+#: sandbox, no GPU, no background traffic (which would flood refused connections).
+CHROMIUM_ARGS = [
+    "--headless",
+    "--no-sandbox",
+    "--disable-gpu",
+    "--disable-quic",
+    "--no-first-run",
+    "--disable-background-networking",
+    "--disable-component-update",
+    "--disable-sync",
+]
+REPO = Path(__file__).resolve().parents[2]
+#: The AIS 0 fill of report.css (a region not at risk).
+AIS0_FILL = "rgb(236, 239, 241)"
+
+
+def screenshot_dir() -> Path:
+    """Where the screenshots go (created)."""
+    base = os.environ.get("AACN_TEST_ARTIFACTS")
+    path = (Path(base) if base else REPO / "test-artifacts") / "screenshots"
+    path.mkdir(parents=True, exist_ok=True)
+    return path
+
+
+def _chromium_candidates() -> list[str | None]:
+    found: list[str | None] = []
+    given = os.environ.get("AACN_TEST_CHROMIUM")
+    if given:
+        found.append(given)
+    for name in ("chromium", "chromium-browser", "google-chrome", "google-chrome-stable"):
+        path = shutil.which(name)
+        if path and path not in found:
+            found.append(path)
+    found.append(None)  # a Playwright-managed build, where `playwright install` could fetch one
+    return found
+
+
+@pytest.fixture(scope="module")
+def chromium() -> Iterator[Any]:
+    """A running headless Chromium, or a skip that says why none could be started."""
+    try:
+        from playwright.sync_api import Error, sync_playwright
+    except ImportError as exc:  # pragma: no cover - playwright is in the test extra
+        pytest.skip(f"no Chromium can be started: the playwright package is missing ({exc})")
+    manager = sync_playwright().start()
+    reasons = []
+    browser = None
+    for exe in _chromium_candidates():
+        try:
+            browser = manager.chromium.launch(
+                executable_path=exe, args=CHROMIUM_ARGS, headless=True, timeout=60_000
+            )
+            break
+        except Error as exc:
+            first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+            reasons.append(f"{exe or 'Playwright-managed Chromium'}: {first}")
+    if browser is None:
+        manager.stop()
+        pytest.skip("no Chromium can be started (apt-get install chromium): " + "; ".join(reasons))
+    try:
+        yield browser
+    finally:
+        browser.close()
+        manager.stop()
+
+
+# ---------------------------------------------------------------- the served service
+
+
+@dataclass
+class Served:
+    base: str
+    keys: dict[str, str]
+    #: name -> the stored case (GET /v1/cases/{id})
+    cases: dict[str, dict[str, Any]] = field(default_factory=dict)
+
+    def url(self, name: str) -> str:
+        return f"{self.base}/v1/cases/{self.cases[name]['case_id']}/report"
+
+
+def _free_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+@pytest.fixture(scope="module")
+def served(chromium: Any, tmp_path_factory: pytest.TempPathFactory) -> Iterator[Served]:
+    """The service as a process of its own, with keys and five real cases."""
+    tmp = tmp_path_factory.mktemp("served")
+    env = {
+        **os.environ,
+        "AACN_DATABASE_URL": f"sqlite:///{tmp / 'served.db'}",
+        "AACN_SESSION_SECRET": secrets.token_urlsafe(32),
+        "AACN_LOG_LEVEL": "WARNING",
+    }
+    cli = [sys.executable, "-m", "service.cli"]
+
+    def key(role: str, name: str) -> str:
+        return subprocess.run(
+            [*cli, "keys", "create", "--role", role, "--name", name],
+            env=env,
+            capture_output=True,
+            text=True,
+            check=True,
+            timeout=180,
+        ).stdout.strip()
+
+    keys = {
+        "auditor": key("auditor", "ems-supervisor"),
+        "submitter": key("submitter", "call-center-north"),
+    }
+    port = _free_port()
+    log = tmp / "server.log"
+    with log.open("w") as sink:
+        server = subprocess.Popen(
+            [*cli, "serve", "--port", str(port)], env=env, stdout=sink, stderr=subprocess.STDOUT
+        )
+    base = f"http://127.0.0.1:{port}"
+    try:
+        deadline = time.monotonic() + 180  # a cold start on a busy machine
+        while True:
+            try:
+                if httpx.get(base + "/readyz", timeout=2.0).status_code == 200:
+                    break
+            except httpx.TransportError:
+                pass
+            if server.poll() is not None:
+                pytest.fail(f"server exited: {log.read_text()}")
+            if time.monotonic() > deadline:
+                pytest.fail(f"server never became ready: {log.read_text()}")
+            time.sleep(0.2)
+        out = Served(base=base, keys=keys)
+        submit = {"Authorization": f"Bearer {keys['submitter']}"}
+        audit = {"Authorization": f"Bearer {keys['auditor']}"}
+        makers: dict[str, Callable[[], dict[str, Any]]] = {
+            "head-injury": head_injury,
+            "minor": minor,
+            "side-edr": side_edr,
+            "rear-seat-rollover": rear_seat_rollover,
+            "acceleration": acceleration,
+        }
+        for name, make in makers.items():
+            r = httpx.post(base + "/v1/cases", json=make(), headers=submit, timeout=60)
+            assert r.status_code == 201, r.text
+            got = httpx.get(base + r.headers["location"], headers=audit, timeout=30)
+            out.cases[name] = got.json()
+        head = out.cases["head-injury"]["result"]["occupants"][0]["region_ais"]["head_neck"]
+        assert head >= 2, "the head-injury case must have head/neck AIS 2 or more"
+        yield out
+    finally:
+        server.terminate()
+        server.wait(timeout=30)
+
+
+# ---------------------------------------------------------------- pages
+
+
+@dataclass
+class Tab:
+    """A page and the problems it reported (console errors, page errors, failed loads)."""
+
+    page: Any
+    problems: list[str]
+
+
+def _tab(context: Any) -> Tab:
+    page = context.new_page()
+    problems: list[str] = []
+    page.on(
+        "console",
+        lambda m: problems.append(f"console {m.type}: {m.text}") if m.type == "error" else None,
+    )
+    page.on("pageerror", lambda e: problems.append(f"page error: {e}"))
+    # a load cut short by the next navigation (net::ERR_ABORTED) is not a fault of the page
+    page.on(
+        "requestfailed",
+        lambda r: (
+            problems.append(f"failed: {r.url} {r.failure}")
+            if "ERR_ABORTED" not in str(r.failure)
+            else None
+        ),
+    )
+    page.on(
+        "response",
+        lambda r: (
+            problems.append(f"{r.status}: {r.url}")
+            if r.status >= 400 and r.request.resource_type != "document"
+            else None
+        ),
+    )
+    return Tab(page, problems)
+
+
+def _sign_in(tab: Tab, base: str, key: str) -> None:
+    """Sign in through the form, as a person would."""
+    tab.page.goto(f"{base}/v1/session")
+    tab.page.fill("#api_key", key)
+    tab.page.click("#login button[type=submit]")
+    tab.page.wait_for_url(f"{base}/v1/reports")
+
+
+@pytest.fixture(scope="module")
+def signed_in(chromium: Any, served: Served) -> Iterator[Any]:
+    """A browser context that signed in with the auditor key."""
+    context = chromium.new_context(viewport={"width": 1280, "height": 900})
+    tab = _tab(context)
+    _sign_in(tab, served.base, served.keys["auditor"])
+    assert tab.problems == []
+    tab.page.close()
+    try:
+        yield context
+    finally:
+        context.close()
+
+
+def _shot(page: Any, name: str) -> Path:
+    path = screenshot_dir() / f"{name}.png"
+    page.screenshot(path=str(path), full_page=True)
+    assert path.stat().st_size > 1000
+    return path
+
+
+def _pct(p: float) -> str:
+    return f"{100 * p:.1f} %"
+
+
+def test_case_page_shows_the_recommendation_and_interval_without_console_errors(
+    served: Served, signed_in: Any
+) -> None:
+    tab = _tab(signed_in)
+    page = tab.page
+    response = page.goto(served.url("head-injury"))
+    assert response.status == 200
+    triage = served.cases["head-injury"]["result"]["triage"]
+    decision = page.locator("#decision")
+    assert decision.locator(".verdict").inner_text() == "TRAUMA CENTER"
+    assert triage["recommendation"] in decision.inner_text()
+    assert decision.locator(".probability").inner_text() == _pct(triage["probability"])
+    low, high = triage["probability_ci95"]
+    assert decision.locator(".interval").inner_text() == f"{_pct(low)} to {_pct(high)}"
+    assert decision.locator(".threshold-value").inner_text() == _pct(triage["threshold"])
+    assert "MAIS 3+" in decision.inner_text()
+    assert "stand-in for ISS 15+" in decision.inner_text()
+    assert "since the crash" in decision.locator(".since").inner_text()
+    # the interval is drawn as a bar against the threshold
+    ci = decision.locator("svg.pbar rect.ci")
+    assert ci.is_visible()
+    assert float(ci.get_attribute("width") or 0) > 1
+    assert decision.locator("svg.pbar line.threshold").count() == 1
+    # the stylesheet loaded under the CSP: the decision is framed in the alarm colour
+    border = decision.evaluate("e => getComputedStyle(e).borderTopColor")
+    assert border == "rgb(165, 14, 14)"
+    _shot(page, "case-head-injury")
+    assert tab.problems == []
+    page.close()
+
+
+def test_the_body_map_marks_the_head_region(served: Served, signed_in: Any) -> None:
+    tab = _tab(signed_in)
+    page = tab.page
+    page.goto(served.url("head-injury"))
+    ais = served.cases["head-injury"]["result"]["occupants"][0]["region_ais"]
+    head = page.locator("#occupant-0 svg.bodymap g[data-region=head_neck]")
+    assert head.get_attribute("data-ais") == str(ais["head_neck"])
+    assert f"ais-{ais['head_neck']}" in (head.get_attribute("class") or "").split()
+    assert head.locator("text.ais-label").text_content() == str(ais["head_neck"])
+    skull = head.locator("circle")
+    assert skull.is_visible()
+    assert skull.evaluate("e => getComputedStyle(e).fill") != AIS0_FILL
+    for region, level in ais.items():
+        shape = page.locator(f"#occupant-0 svg.bodymap g[data-region={region}] > :not(text)")
+        fill = shape.first.evaluate("e => getComputedStyle(e).fill")
+        if region != "external":
+            assert (fill == AIS0_FILL) == (level == 0), (region, level, fill)
+    page.locator("#occupant-0 .bodyblock").screenshot(
+        path=str(screenshot_dir() / "bodymap-head-injury.png")
+    )
+    assert tab.problems == []
+    page.close()
+
+
+def test_every_case_page_shows_the_stored_numbers(served: Served, signed_in: Any) -> None:
+    tab = _tab(signed_in)
+    page = tab.page
+    for name, stored in served.cases.items():
+        assert page.goto(served.url(name)).status == 200
+        result = stored["result"]
+        data = page.eval_on_selector("#decision", "e => ({...e.dataset})")
+        assert float(data["probability"]) == result["triage"]["probability"]
+        assert [float(data["ciLow"]), float(data["ciHigh"])] == result["triage"]["probability_ci95"]
+        assert float(data["threshold"]) == result["triage"]["threshold"]
+        cards = page.eval_on_selector_all("section.occupant", "es => es.map(e => ({...e.dataset}))")
+        assert len(cards) == len(result["occupants"])
+        for card, occ in zip(cards, result["occupants"], strict=True):
+            assert card["seat"] == occ["seat"]
+            assert float(card["probability"]) == occ["triage"]["probability"]
+            assert [float(card["ciLow"]), float(card["ciHigh"])] == occ["triage"][
+                "probability_ci95"
+            ]
+        models = page.eval_on_selector_all(
+            "#audit tr[data-model]", "es => es.map(e => [e.dataset.model, e.dataset.version])"
+        )
+        assert dict(models) == {k: v["version"] for k, v in stored["models"].items()}
+        assert page.locator("#audit .client").inner_text() == stored["client_name"]
+        assert page.locator("#crash svg.plot polyline").count() >= 1
+        assert page.locator("#crash svg.car g.pdof").get_attribute("data-pdof-deg") == str(
+            result["pulse"]["pdof_deg"]
+        )
+        _shot(page, f"case-{name}")
+    assert tab.problems == []
+    page.close()
+
+
+def test_the_case_list_filters(served: Served, signed_in: Any) -> None:
+    tab = _tab(signed_in)
+    page = tab.page
+    page.goto(f"{served.base}/v1/reports")
+
+    def listed() -> list[str]:
+        return page.eval_on_selector_all("tr[data-case-id]", "es => es.map(e => e.dataset.caseId)")
+
+    ids = {name: c["case_id"] for name, c in served.cases.items()}
+    assert sorted(listed()) == sorted(ids.values())
+    _shot(page, "list-all")
+    page.select_option("select[name=iss15_plus]", "false")
+    page.click("#filters button[type=submit]")
+    page.wait_for_url("**iss15_plus=false**")
+    assert listed() == [ids["minor"]]
+    _shot(page, "list-filtered-no-indication")
+    page.select_option("select[name=iss15_plus]", "")
+    page.select_option("select[name=impact_mode]", "near_side")
+    page.click("#filters button[type=submit]")
+    page.wait_for_url("**impact_mode=near_side**")
+    assert listed() == [ids["side-edr"]]
+    _shot(page, "list-filtered-near-side")
+    page.click(f"tr[data-case-id='{ids['side-edr']}'] a")
+    page.wait_for_url(served.url("side-edr"))
+    assert page.locator("#occupant-1").get_attribute("data-seat") == "front_passenger"
+    assert tab.problems == []
+    page.close()
+
+
+def test_an_unauthenticated_visit_is_refused(chromium: Any, served: Served) -> None:
+    context = chromium.new_context()
+    tab = _tab(context)
+    page = tab.page
+    stored = served.cases["head-injury"]
+    response = page.goto(served.url("head-injury"))
+    assert response.status == 401
+    assert page.locator("#login").is_visible()
+    html = page.content()
+    assert stored["event_id"] not in html
+    assert _pct(stored["result"]["triage"]["probability"]) not in html
+    assert page.locator("#decision").count() == 0
+    _shot(page, "refused-sign-in")
+    # the only console error is the refused document itself
+    assert all("401" in p for p in tab.problems), tab.problems
+    # signing in from that form leads back to the case
+    tab.problems.clear()
+    page.fill("#api_key", served.keys["auditor"])
+    page.click("#login button[type=submit]")
+    page.wait_for_url(served.url("head-injury"))
+    assert page.locator("#decision .verdict").inner_text() == "TRAUMA CENTER"
+    assert tab.problems == []
+    context.close()
+
+
+def test_a_submitter_key_cannot_sign_in(chromium: Any, served: Served) -> None:
+    context = chromium.new_context()
+    tab = _tab(context)
+    tab.page.goto(f"{served.base}/v1/session")
+    tab.page.fill("#api_key", served.keys["submitter"])
+    tab.page.click("#login button[type=submit]")
+    assert "auditor or admin" in tab.page.locator("#login p[role=alert]").inner_text()
+    assert tab.page.locator("#plain-http").count() == 0, "127.0.0.1 keeps Secure cookies"
+    assert not [c for c in context.cookies() if c["name"] == "aacn_session"]
+    context.close()
+
+
+def test_small_screen_and_print(chromium: Any, served: Served) -> None:
+    context = chromium.new_context(
+        viewport={"width": 390, "height": 844}, device_scale_factor=2, is_mobile=True
+    )
+    tab = _tab(context)
+    page = tab.page
+    _sign_in(tab, served.base, served.keys["auditor"])
+    for name in ("head-injury", "side-edr"):
+        page.goto(served.url(name))
+        width = page.evaluate("[document.documentElement.scrollWidth, window.innerWidth]")
+        assert width[0] <= width[1], f"horizontal scroll on a small screen: {width}"
+        assert page.locator("#occupant-0 svg.bodymap").is_visible()
+        _shot(page, f"case-{name}-small-screen")
+    page.emulate_media(media="print")
+    page.goto(served.url("head-injury"))
+    assert page.locator(".topbar nav").is_hidden()
+    assert page.locator("#decision").is_visible()
+    _shot(page, "case-head-injury-print")
+    page.pdf(path=str(screenshot_dir() / "case-head-injury.pdf"))
+    assert tab.problems == []
+    context.close()
+
+
+def test_logout_ends_the_session(chromium: Any, served: Served) -> None:
+    context = chromium.new_context()
+    tab = _tab(context)
+    page = tab.page
+    _sign_in(tab, served.base, served.keys["auditor"])
+    cookie = next(c for c in context.cookies() if c["name"] == "aacn_session")
+    assert cookie["httpOnly"]
+    assert cookie["secure"]
+    assert cookie["sameSite"] == "Strict"
+    page.click(".topbar button[type=submit]")
+    page.wait_for_url(f"{served.base}/v1/session**")
+    assert page.goto(served.url("minor")).status == 401
+    context.close()
