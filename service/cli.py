@@ -2,12 +2,12 @@
 
 Commands::
 
-    aacn-triage serve [--host H] [--port P]
+    aacn-triage serve [--host H] [--port P] [--workers N]
     aacn-triage db upgrade [REV] | db downgrade REV | db current
-    aacn-triage keys create --role submitter|auditor|admin --name NAME
-    aacn-triage keys list
+    aacn-triage keys create --role submitter|auditor|admin|metrics --name NAME
+    aacn-triage keys list | keys revoke NAME|ID | keys rotate NAME|ID
     aacn-triage triage FILE.json
-    aacn-triage triage --batch IN.jsonl --out OUT.jsonl [--resume]
+    aacn-triage triage --batch IN.jsonl --out OUT.jsonl [--resume] [--workers N]
     aacn-triage simulate FILE.json [--plot OUT.png]
     aacn-triage build-surrogates [--family NAME] [--workers N] ...
     aacn-triage validate-surrogates [--n N] [--seed S] [--family NAME] ...
@@ -41,29 +41,45 @@ def _print(text: str, *, err: bool = False) -> None:
 def _settings() -> Any:
     from service.settings import get_settings
 
-    settings = get_settings()
-    if settings.numba_cache_dir is not None:
-        os.environ.setdefault("NUMBA_CACHE_DIR", str(settings.numba_cache_dir))
-    return settings
+    return get_settings()
 
 
 # ------------------------------------------------------------------- commands
 
 
 def _cmd_serve(args: argparse.Namespace) -> int:
+    """Serve HTTP with N worker processes (uvicorn's supervisor), each warmed before it
+    accepts connections; SIGTERM lets in-flight requests finish, then exits."""
     import uvicorn
 
-    from service.app import create_app
+    from service.logs import configure_logging, log_config
 
     settings = _settings()
     host = args.host or settings.host
     port = args.port or settings.port
+    workers = args.workers or settings.workers or os.cpu_count() or 1
+    configure_logging(settings.log_level)
+    if settings.auto_migrate:  # once, before the workers start
+        from service.db import migrate
+
+        migrate.upgrade(settings.database_url)
+    if workers > 1:
+        # compile the kernels into the shared numba cache once, so that every worker
+        # loads them instead of compiling them side by side
+        from models.lpm.simulate import warm_up
+
+        warm_up()
     uvicorn.run(
-        create_app(settings),
+        "service.app:create_app",
+        factory=True,
         host=host,
         port=port,
+        workers=workers,
         log_level=settings.log_level.lower(),
+        log_config=log_config(settings.log_level),
         proxy_headers=True,
+        server_header=False,
+        timeout_graceful_shutdown=settings.shutdown_timeout_s,
     )
     return 0
 
@@ -91,7 +107,7 @@ def _sessions() -> Any:
 
 
 def _cmd_keys(args: argparse.Namespace) -> int:
-    from service.auth import Role, create_api_key
+    from service.auth import Role, create_api_key, revoke_api_key, rotate_api_key
     from service.db import repository
 
     sessions = _sessions()
@@ -104,10 +120,29 @@ def _cmd_keys(args: argparse.Namespace) -> int:
         _print(f"created key {row.name!r} (role {row.role}); it is shown once:", err=True)
         _print(secret)
         return 0
+    if args.keys_command in ("revoke", "rotate"):
+        try:
+            if args.keys_command == "revoke":
+                row = revoke_api_key(sessions, args.key)
+                _print(f"revoked key {row.name!r} (id {row.id}); refused from now on", err=True)
+            else:
+                row, secret = rotate_api_key(sessions, args.key)
+                _print(
+                    f"rotated key {row.name!r} (id {row.id}); the old secret is refused from "
+                    "now on; the new one is shown once:",
+                    err=True,
+                )
+                _print(secret)
+        except LookupError as exc:
+            _print(f"error: {exc}", err=True)
+            return 1
+        return 0
     with sessions() as session:
         for key in repository.list_api_keys(session):
             state = "revoked" if key.revoked_at else "active"
-            _print(f"{key.name}\t{key.role}\t{key.key_prefix}...\t{state}\t{key.created_at}")
+            _print(
+                f"{key.id}\t{key.name}\t{key.role}\t{key.key_prefix}...\t{state}\t{key.created_at}"
+            )
     return 0
 
 
@@ -430,6 +465,9 @@ def build_parser() -> argparse.ArgumentParser:
     serve = sub.add_parser("serve", help="run the HTTP service")
     serve.add_argument("--host", help="bind address (default AACN_HOST or 127.0.0.1)")
     serve.add_argument("--port", type=int, help="port (default AACN_PORT or 8000)")
+    serve.add_argument(
+        "--workers", type=int, help="worker processes (default AACN_WORKERS or the CPU count)"
+    )
     serve.set_defaults(func=_cmd_serve)
 
     db = sub.add_parser("db", help="database migrations")
@@ -444,9 +482,17 @@ def build_parser() -> argparse.ArgumentParser:
     keys = sub.add_parser("keys", help="API keys")
     keys_sub = keys.add_subparsers(dest="keys_command", required=True)
     create = keys_sub.add_parser("create", help="create a key and print it once")
-    create.add_argument("--role", required=True, choices=["submitter", "auditor", "admin"])
+    create.add_argument(
+        "--role", required=True, choices=["submitter", "auditor", "admin", "metrics"]
+    )
     create.add_argument("--name", required=True, help="client name, recorded with its cases")
-    keys_sub.add_parser("list", help="list keys (names, roles, prefixes)")
+    keys_sub.add_parser("list", help="list keys (ids, names, roles, prefixes)")
+    revoke = keys_sub.add_parser("revoke", help="revoke a key (refused at once)")
+    revoke.add_argument("key", help="the key's name or id")
+    rotate = keys_sub.add_parser(
+        "rotate", help="new secret for a key (same name and role); the old one is refused at once"
+    )
+    rotate.add_argument("key", help="the key's name or id")
     keys.set_defaults(func=_cmd_keys)
 
     tri = sub.add_parser("triage", help="triage notifications offline (no server, no database)")

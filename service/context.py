@@ -2,7 +2,11 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import logging
+import threading
+import time
+from dataclasses import dataclass, field
+from typing import Any
 
 from sqlalchemy import Engine
 from sqlalchemy.orm import Session, sessionmaker
@@ -10,6 +14,14 @@ from sqlalchemy.orm import Session, sessionmaker
 from models.triage import EngineModels, load_engine_models
 from service.metrics import Metrics
 from service.settings import Settings
+from service.spool import Spool
+
+log = logging.getLogger("aacn_triage.store")
+
+#: Least seconds between two resets of the connection pool after store errors.
+#: [R] A reset opens fresh connections (one that was opened read-only, or to a
+#: server that restarted, is never reused); once a second is plenty under load.
+POOL_RESET_MIN_INTERVAL_S = 1.0
 
 __all__ = ["ServiceContext", "engine_models_for"]
 
@@ -39,4 +51,24 @@ class ServiceContext:
     sessions: sessionmaker[Session]
     metrics: Metrics
     models: EngineModels | None
+    spool: Spool
     models_error: str | None = None
+    #: API keys seen valid: hash -> (caller, monotonic time). Used only while the
+    #: store cannot be read, so that spooling works through an outage.
+    key_cache: dict[str, tuple[Any, float]] = field(default_factory=dict)
+    _last_reset: float = 0.0
+    _reset_lock: threading.Lock = field(default_factory=threading.Lock)
+
+    def reset_store_connections(self) -> None:
+        """Drop pooled connections after a store error (at most once a second).
+
+        A connection opened while the database was read-only stays read-only, and
+        one to a server that restarted is dead; new ones are opened on next use.
+        """
+        with self._reset_lock:
+            now = time.monotonic()
+            if now - self._last_reset < POOL_RESET_MIN_INTERVAL_S:
+                return
+            self._last_reset = now
+        log.warning("store error: resetting the connection pool")
+        self.db_engine.dispose()

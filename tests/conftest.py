@@ -163,7 +163,8 @@ def sqlite_url(tmp_path: Path) -> str:
 # ---------------------------------------------------------------------- app
 
 
-def _api(url: str, **overrides: object) -> Iterator[ApiClient]:
+def _api(url: str, spool_dir: Path, **overrides: object) -> Iterator[ApiClient]:
+    overrides.setdefault("spool_path", spool_dir / "spool.db")
     settings = Settings(database_url=url, **overrides)  # type: ignore[arg-type]
     app = create_app(settings)
     with TestClient(app) as client:
@@ -177,16 +178,16 @@ def _api(url: str, **overrides: object) -> Iterator[ApiClient]:
 
 
 @pytest.fixture
-def api(sqlite_url: str) -> Iterator[ApiClient]:
+def api(sqlite_url: str, tmp_path: Path) -> Iterator[ApiClient]:
     """The app on a fresh SQLite file, with keys for every role."""
-    yield from _api(sqlite_url)
+    yield from _api(sqlite_url, tmp_path)
 
 
 @pytest.fixture(params=["sqlite", pytest.param("postgres", marks=pytest.mark.postgres)])
 def api_any_db(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[ApiClient]:
     """The app on SQLite and on PostgreSQL."""
     if request.param == "sqlite":
-        yield from _api(f"sqlite:///{tmp_path / 'aacn.db'}")
+        yield from _api(f"sqlite:///{tmp_path / 'aacn.db'}", tmp_path)
     else:
         url = request.getfixturevalue("postgres_url")
-        yield from _api(url)
+        yield from _api(url, tmp_path)
