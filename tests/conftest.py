@@ -57,6 +57,8 @@ def _free_port() -> int:
 class _Cluster:
     admin_url: str
     stop: Callable[[], None]
+    #: ``pg_ctl(*args)`` on this cluster, e.g. ``("stop", "-m", "fast")``, ``("start",)``
+    pg_ctl: Callable[..., None]
 
 
 def _start_cluster() -> _Cluster:
@@ -90,8 +92,7 @@ def _start_cluster() -> _Cluster:
             [*prefix, *cmd], check=True, capture_output=True, text=True, timeout=120, cwd=root
         )
 
-    try:
-        run(str(pg_bin / "initdb"), "-D", str(data), "-A", "trust", "-U", user, "-E", "UTF8")
+    def pg_ctl(command: str, *options: str) -> None:
         run(
             str(pg_bin / "pg_ctl"),
             "-D",
@@ -103,8 +104,13 @@ def _start_cluster() -> _Cluster:
             "60",
             "-o",
             f"-c listen_addresses=127.0.0.1 -p {port} -k {root} -c fsync=off",
-            "start",
+            command,
+            *options,
         )
+
+    try:
+        run(str(pg_bin / "initdb"), "-D", str(data), "-A", "trust", "-U", user, "-E", "UTF8")
+        pg_ctl("start")
     except subprocess.CalledProcessError as exc:
         shutil.rmtree(root, ignore_errors=True)
         raise RuntimeError(f"could not start PostgreSQL: {exc.stderr.strip()[-500:]}") from exc
@@ -115,7 +121,9 @@ def _start_cluster() -> _Cluster:
         finally:
             shutil.rmtree(root, ignore_errors=True)
 
-    return _Cluster(admin_url=f"postgresql+psycopg://{user}@127.0.0.1:{port}/postgres", stop=stop)
+    return _Cluster(
+        admin_url=f"postgresql+psycopg://{user}@127.0.0.1:{port}/postgres", stop=stop, pg_ctl=pg_ctl
+    )
 
 
 @pytest.fixture(scope="session")
@@ -133,6 +141,24 @@ def postgres_admin_url() -> Iterator[str]:
         yield cluster.admin_url
     finally:
         cluster.stop()
+
+
+@pytest.fixture
+def own_postgres() -> Iterator[_Cluster]:
+    """A PostgreSQL cluster of the test's own, which the test may stop and start."""
+    if os.environ.get("AACN_TEST_POSTGRES_URL"):
+        pytest.skip("needs a cluster the test can stop: unset AACN_TEST_POSTGRES_URL")
+    try:
+        cluster = _start_cluster()
+    except (RuntimeError, OSError, subprocess.SubprocessError) as exc:
+        pytest.skip(f"PostgreSQL tests skipped: {exc}")
+    try:
+        yield cluster
+    finally:
+        try:
+            cluster.stop()
+        except subprocess.CalledProcessError:  # stopped by the test already
+            pass
 
 
 @pytest.fixture
