@@ -238,8 +238,9 @@ def _batch_line(item: tuple[int, str]) -> str:
 def _run_batch(src: Path, out: Path, models: Any, *, resume: bool, workers: int = 1) -> int:
     """Evaluate a JSONL file into OUT (one line per input line, in order).
 
-    With `workers` > 1 the lines are triaged by a pool of processes (each loads the
-    models once, from the shared numba cache) and written back in input order. With
+    With `workers` > 1 the lines are triaged by a pool of processes (forked from this
+    one with its loaded models where the platform forks; else spawned, each loading
+    them once from the shared numba cache) and written back in input order. With
     `resume`, the complete lines already in OUT are kept and skipped, so an
     interrupted run continues where it stopped; without it OUT is rewritten.
     """
@@ -271,11 +272,15 @@ def _run_batch(src: Path, out: Path, models: Any, *, resume: bool, workers: int 
         out.open("a", encoding="utf-8") as sink,
         tqdm(total=len(lines), initial=done, unit="case", file=sys.stderr, desc="triage") as bar,
     ):
+        _BATCH_MODELS = models
         if workers == 1:
-            _BATCH_MODELS = models
             results: Any = map(_batch_line, todo)
             pool = None
-        else:
+        elif "fork" in multiprocessing.get_all_start_methods():
+            # forked workers inherit the loaded, warmed models: no start-up per worker
+            pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("fork"))
+            results = pool.map(_batch_line, todo, chunksize=BATCH_CHUNK)
+        else:  # spawned workers load the models once each, from the shared numba cache
             pool = ProcessPoolExecutor(
                 workers,
                 mp_context=multiprocessing.get_context("spawn"),

@@ -23,11 +23,30 @@ log = logging.getLogger("aacn_triage.store")
 #: server that restarted, is never reused); once a second is plenty under load.
 POOL_RESET_MIN_INTERVAL_S = 1.0
 
-__all__ = ["ServiceContext", "engine_models_for"]
+__all__ = ["ServiceContext", "engine_models_for", "limit_blas_threads"]
+
+
+def limit_blas_threads(threads: int) -> None:
+    """Cap the BLAS threads of this process (numpy's OpenBLAS), already loaded or not.
+
+    The engine's matrix products are small (the surrogate propagation's largest is
+    about 1000 x 450 by 450 x 1000); with OpenBLAS's default of one thread per core
+    they were slower, and on a busy machine much slower: one triage of a
+    single-occupant notification took a median 48 ms with 2 threads against 12 ms
+    with 1 on this 2-core box at load average 7 (measured 2026-12-04). Serving
+    several worker processes also wants one thread each, not cores x cores.
+    """
+    from threadpoolctl import threadpool_limits  # type: ignore[import-untyped]
+
+    threadpool_limits(limits=threads, user_api="blas")
 
 
 def engine_models_for(settings: Settings) -> EngineModels:
-    """Load the engine models as the settings configure them (raises ValueError)."""
+    """Load the engine models as the settings configure them (raises ValueError).
+
+    Also caps this process's BLAS threads at `settings.blas_threads`.
+    """
+    limit_blas_threads(settings.blas_threads)
     return load_engine_models(
         threshold_override=settings.triage_threshold,
         operating_point=settings.operating_point,

@@ -81,6 +81,12 @@ class Settings(BaseSettings):
     docs_enabled: bool = Field(
         default=True, description="Serve /docs (bundled Swagger UI, no CDN) and /openapi.json."
     )
+    blas_threads: int = Field(
+        default=1,
+        ge=1,
+        description="BLAS threads per process for the engine's matrix products (one: they are "
+        "small, and several worker processes share the cores; `service.context`).",
+    )
     workers: int | None = Field(
         default=None, ge=1, description="Worker processes of `serve`; None: the CPU count."
     )
