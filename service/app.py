@@ -4,27 +4,35 @@ from __future__ import annotations
 
 import json
 import logging
-import os
+import re
 import secrets
+import uuid
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
+from importlib import resources
 from pathlib import Path
 from typing import Any
 
-from fastapi import FastAPI
+from fastapi import FastAPI, Request
+from fastapi.openapi.docs import get_swagger_ui_html
+from fastapi.responses import HTMLResponse
 from fastapi.routing import APIRoute
 from fastapi.staticfiles import StaticFiles
+from starlette.datastructures import MutableHeaders
 from starlette.responses import Response
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
-from service import __version__
+from service import __version__, cases_service
 from service.api import cases, health, pages
 from service.context import ServiceContext, engine_models_for
 from service.db import migrate
 from service.db.session import make_engine, make_sessionmaker
+from service.logs import request_id
 from service.metrics import Metrics, metrics_middleware
 from service.problems import PROBLEM_MEDIA_TYPE, install_problem_handlers, problem_response
+from service.schemas import EXAMPLE_NOTIFICATIONS, CrashNotificationIn
 from service.settings import Settings, get_settings
+from service.spool import Spool, SpoolReplayer
 
 __all__ = ["create_app"]
 
@@ -32,7 +40,13 @@ log = logging.getLogger("aacn_triage")
 
 
 class BodySizeLimit:
-    """Refuse request bodies over `max_bytes` with 413, before they are read whole."""
+    """Refuse request bodies over `max_bytes` with 413, before they are read whole.
+
+    A declared ``Content-Length`` over the limit is refused at once. A body without
+    one (``Transfer-Encoding: chunked``) is read here up to the limit and handed on
+    whole, so that it too gets the 413 problem instead of a parse error and a reset
+    connection (issue 24, a fuzzing finding).
+    """
 
     def __init__(self, app: ASGIApp, max_bytes: int) -> None:
         self.app = app
@@ -43,24 +57,29 @@ class BodySizeLimit:
             await self.app(scope, receive, send)
             return
         declared = dict(scope.get("headers") or []).get(b"content-length")
-        if declared is not None and declared.isdigit() and int(declared) > self.max_bytes:
-            await self._refuse(scope, receive, send)
+        if declared is not None:
+            if declared.isdigit() and int(declared) > self.max_bytes:
+                await self._refuse(scope, receive, send)
+                return
+            await self.app(scope, receive, send)
             return
+        chunks: list[bytes] = []
         received = 0
-
-        async def limited_receive() -> Message:
-            nonlocal received
+        while True:
             message = await receive()
-            if message["type"] == "http.request":
-                received += len(message.get("body", b""))
-                if received > self.max_bytes:
-                    raise _TooLarge
-            return message
-
-        try:
-            await self.app(scope, limited_receive, send)
-        except _TooLarge:
-            await self._refuse(scope, receive, send)
+            if message["type"] != "http.request":  # the client went away
+                await self.app(scope, _replay([message]), send)
+                return
+            body = message.get("body", b"")
+            received += len(body)
+            if received > self.max_bytes:
+                await self._refuse(scope, receive, send)
+                return
+            chunks.append(body)
+            if not message.get("more_body", False):
+                break
+        whole = {"type": "http.request", "body": b"".join(chunks), "more_body": False}
+        await self.app(scope, _replay([whole], then=receive), send)
 
     async def _refuse(self, scope: Scope, receive: Receive, send: Send) -> None:
         response = problem_response(
@@ -69,12 +88,64 @@ class BodySizeLimit:
             f"The body exceeds {self.max_bytes} bytes.",
             slug="payload-too-large",
             instance=scope.get("path"),
+            headers={"Connection": "close"},
         )
         await response(scope, receive, send)
 
 
-class _TooLarge(Exception):
-    pass
+def _replay(messages: list[Message], then: Receive | None = None) -> Receive:
+    """A receive callable giving `messages` first, then `then` (a disconnect wait)."""
+    pending = list(messages)
+
+    async def receive() -> Message:
+        if pending:
+            return pending.pop(0)
+        if then is not None:
+            return await then()
+        return {"type": "http.disconnect"}
+
+    return receive
+
+
+#: A request id taken from the client: printable ASCII without spaces, bounded.
+_REQUEST_ID = re.compile(r"^[\x21-\x7e]{1,64}$")
+
+
+class ResponseHeaders:
+    """Request id and security headers on every response.
+
+    ``X-Request-ID`` (the client's when it sends a plausible one, else a new UUID)
+    is echoed and set for the logs; ``X-Content-Type-Options: nosniff`` always;
+    ``Cache-Control: no-store`` on case data (``/v1/``); no ``Server`` banner.
+    """
+
+    def __init__(self, app: ASGIApp) -> None:
+        self.app = app
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] != "http":
+            await self.app(scope, receive, send)
+            return
+        given = dict(scope.get("headers") or []).get(b"x-request-id", b"").decode("latin-1")
+        rid = given if _REQUEST_ID.match(given) else uuid.uuid4().hex
+        token = request_id.set(rid)
+        case_data = str(scope.get("path", "")).startswith("/v1/")
+
+        async def send_with_headers(message: Message) -> None:
+            if message["type"] == "http.response.start":
+                headers = MutableHeaders(scope=message)
+                headers["X-Request-ID"] = rid
+                headers["X-Content-Type-Options"] = "nosniff"
+                if case_data:
+                    headers["Cache-Control"] = "no-store"
+                if "server" in headers:
+                    del headers["server"]
+            await send(message)
+
+        try:
+            await self.app(scope, receive, send_with_headers)
+        finally:
+            request_id.reset(token)
 
 
 #: The pages' stylesheet and icon (package data).
@@ -126,7 +197,8 @@ def _document_validation_problems(app: FastAPI) -> None:
                     response["content"] = {
                         PROBLEM_MEDIA_TYPE: {"schema": {"$ref": "#/components/schemas/Problem"}}
                     }
-        schemas = doc.get("components", {}).get("schemas", {})
+        schemas = doc.setdefault("components", {}).setdefault("schemas", {})
+        _document_notification_body(doc, schemas)
         if "HTTPValidationError" not in json.dumps(doc.get("paths", {})):
             schemas.pop("HTTPValidationError", None)
             schemas.pop("ValidationError", None)
@@ -134,6 +206,53 @@ def _document_validation_problems(app: FastAPI) -> None:
         return doc
 
     app.openapi = openapi  # type: ignore[method-assign]
+
+
+def _document_notification_body(doc: dict[str, Any], schemas: dict[str, Any]) -> None:
+    """Document POST /v1/cases's body, which the route reads itself.
+
+    The route parses the body after authentication and refuses duplicate keys
+    (`service.api.cases`), so FastAPI does not see it as a parameter; its schema
+    and examples are added here, as FastAPI would have.
+    """
+    post = doc.get("paths", {}).get("/v1/cases", {}).get("post")
+    if post is None:
+        return
+    schema = CrashNotificationIn.model_json_schema(ref_template="#/components/schemas/{model}")
+    for name, sub in schema.pop("$defs", {}).items():
+        schemas.setdefault(name, sub)
+    schemas["CrashNotificationIn"] = schema
+    post["requestBody"] = {
+        "required": True,
+        "content": {
+            "application/json": {
+                "schema": {"$ref": "#/components/schemas/CrashNotificationIn"},
+                "examples": EXAMPLE_NOTIFICATIONS,
+            }
+        },
+    }
+
+
+def _install_offline_docs(app: FastAPI) -> None:
+    """Serve /docs from the Swagger UI files shipped in a package: no CDN needed.
+
+    The call center may be offline; FastAPI's default page loads Swagger UI from a
+    public CDN. The files come with the ``fastapi-offline`` package (Swagger UI 5,
+    which reads OpenAPI 3.1).
+    """
+    static = resources.files("fastapi_offline") / "static"
+    app.mount("/docs/static", StaticFiles(directory=str(static)), name="docs-static")
+
+    @app.get("/docs", include_in_schema=False)
+    async def docs(request: Request) -> HTMLResponse:
+        root = request.scope.get("root_path", "")
+        return get_swagger_ui_html(
+            openapi_url=f"{root}/openapi.json",
+            title="aacn-triage - API documentation",
+            swagger_js_url=f"{root}/docs/static/swagger-ui-bundle.js",
+            swagger_css_url=f"{root}/docs/static/swagger-ui.css",
+            swagger_favicon_url=f"{root}/docs/static/favicon.png",
+        )
 
 
 def create_app(settings: Settings | None = None) -> FastAPI:
@@ -144,8 +263,6 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     service alive but not ready (/readyz says why).
     """
     settings = settings or get_settings()
-    if settings.numba_cache_dir is not None:
-        os.environ.setdefault("NUMBA_CACHE_DIR", str(settings.numba_cache_dir))
     metrics = Metrics()
 
     @asynccontextmanager
@@ -160,18 +277,28 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         except Exception as exc:  # reported by /readyz, the service stays alive
             error = f"{type(exc).__name__}: {exc}"
             log.error("models failed to load: %s", error)
-        app.state.ctx = ServiceContext(
+        ctx = ServiceContext(
             settings=settings,
             db_engine=db_engine,
             sessions=make_sessionmaker(db_engine),
             metrics=metrics,
             models=models,
+            spool=Spool(settings.resolved_spool_path()),
             models_error=error,
             session_secret=_session_secret(settings),
         )
+        app.state.ctx = ctx
+        replayer = SpoolReplayer(
+            ctx.spool,
+            lambda entry: cases_service.store_spooled(ctx, entry),
+            interval_s=settings.spool_replay_interval_s,
+        )
+        app.state.replayer = replayer
+        replayer.start()
         try:
             yield {}
         finally:
+            replayer.stop()
             db_engine.dispose()
 
     app = FastAPI(
@@ -185,15 +312,18 @@ def create_app(settings: Settings | None = None) -> FastAPI:
             "problem+json. Authenticate with `Authorization: Bearer <key>`."
         ),
         lifespan=lifespan,
-        docs_url="/docs" if settings.docs_enabled else None,
+        docs_url=None,
         redoc_url=None,
         openapi_url="/openapi.json" if settings.docs_enabled else None,
         generate_unique_id_function=_operation_id,
     )
     install_problem_handlers(app)
     _document_validation_problems(app)
+    if settings.docs_enabled:
+        _install_offline_docs(app)
     app.middleware("http")(metrics_middleware(metrics))
     app.add_middleware(BodySizeLimit, max_bytes=settings.max_body_bytes)
+    app.add_middleware(ResponseHeaders)
     app.include_router(health.router)
     app.include_router(cases.router)
     app.include_router(pages.router)

@@ -17,7 +17,8 @@ from dataclasses import dataclass
 from datetime import UTC, datetime
 from typing import Any
 
-from sqlalchemy.exc import IntegrityError
+from sqlalchemy.exc import DBAPIError, IntegrityError
+from sqlalchemy.exc import TimeoutError as PoolTimeoutError
 
 from models.pulse import PulseError
 from models.triage import EngineModels, Method, UnknownVehicleModel, triage
@@ -31,13 +32,16 @@ from service.problems import (
     FieldError,
     IdempotencyConflict,
     NotFound,
+    StoreUnavailable,
     UnprocessableNotification,
 )
 from service.schemas import CaseList, CaseResult, CaseSummary, CrashNotificationIn, StoredCase
+from service.spool import SpoolEntry, SpoolError
 
 log = logging.getLogger("aacn_triage")
 
 __all__ = [
+    "STORE_ERRORS",
     "InvalidCursor",
     "SubmitOutcome",
     "canonical_sha256",
@@ -46,16 +50,25 @@ __all__ = [
     "evaluate",
     "get_case",
     "list_cases",
+    "notification_sha256",
+    "store_spooled",
     "submit",
 ]
+
+log = logging.getLogger("aacn_triage.cases")
+
+#: Errors that mean "the store is unavailable" (down, read-only, full, pool
+#: exhausted), as opposed to an IntegrityError, which is the idempotency race.
+STORE_ERRORS = (DBAPIError, PoolTimeoutError)
 
 
 @dataclass(frozen=True)
 class SubmitOutcome:
-    """A submitted case and whether it was a replay of an earlier one."""
+    """A submitted case, whether it replays an earlier one, whether it is spooled."""
 
     result: CaseResult
     replayed: bool
+    spooled: bool = False
 
 
 class InvalidCursor(UnprocessableNotification):
@@ -66,6 +79,29 @@ def canonical_sha256(document: Any) -> str:
     """SHA-256 of the canonical JSON form (sorted keys, no spaces) of a document."""
     text = json.dumps(document, sort_keys=True, separators=(",", ":"), ensure_ascii=False)
     return hashlib.sha256(text.encode("utf-8")).hexdigest()
+
+
+def _no_negative_zero(value: Any) -> Any:
+    if isinstance(value, float):
+        return 0.0 if value == 0.0 else value
+    if isinstance(value, dict):
+        return {k: _no_negative_zero(v) for k, v in value.items()}
+    if isinstance(value, list):
+        return [_no_negative_zero(v) for v in value]
+    return value
+
+
+def notification_sha256(notification: CrashNotificationIn) -> str:
+    """Fingerprint of what a notification means, for idempotency.
+
+    The canonical JSON of the validated notification: every default written out,
+    numbers as the floats they are (``56`` and ``56.0`` alike, ``-0.0`` as ``0.0``),
+    the crash time in UTC. Two bodies that validate to the same notification are the
+    same body (issue 24: they used to conflict with 409).
+    """
+    document = _no_negative_zero(notification.model_dump(mode="json"))
+    document["occurred_at"] = notification.occurred_at.astimezone(UTC).isoformat()
+    return canonical_sha256(document)
 
 
 def evaluate(
@@ -110,20 +146,143 @@ def evaluate(
     return to_case_result(result, case_id=case_id, received_at=received_at, extra_assumptions=notes)
 
 
+def _conflict(event_id: str, case_id: str) -> IdempotencyConflict:
+    return IdempotencyConflict(
+        f"event_id {event_id!r} was already submitted by this client with a "
+        f"different body (case {case_id}); send a new event_id for a new event."
+    )
+
+
 def _replay_or_conflict(
-    record: IdempotencyRecord, request_sha256: str, ctx: ServiceContext
+    record: IdempotencyRecord, fingerprints: tuple[str, str], ctx: ServiceContext
 ) -> SubmitOutcome:
-    if record.request_sha256 != request_sha256:
-        raise IdempotencyConflict(
-            f"event_id {record.event_id!r} was already submitted by this client with a "
-            f"different body (case {record.case_id}); send a new event_id for a new event."
-        )
+    if record.request_sha256 not in fingerprints:
+        raise _conflict(record.event_id, record.case_id)
     with ctx.sessions() as session:
         case = repository.get_case(session, record.case_id)
         if case is None:  # pragma: no cover - the foreign key forbids it
             raise NotFound(f"case {record.case_id} is missing")
         ctx.metrics.replays.inc()
         return SubmitOutcome(result=CaseResult.model_validate(case.result), replayed=True)
+
+
+def _replay_spooled(entry: SpoolEntry, fingerprint: str, ctx: ServiceContext) -> SubmitOutcome:
+    if entry.request_sha256 != fingerprint:
+        raise _conflict(entry.event_id, entry.case_id)
+    ctx.metrics.replays.inc()
+    result = CaseResult.model_validate({**entry.result, "stored": False, "spooled": True})
+    return SubmitOutcome(result=result, replayed=True, spooled=True)
+
+
+def _case_rows(
+    *,
+    case_id: str,
+    event_id: str,
+    client_name: str,
+    received_at: datetime,
+    stored_at: datetime,
+    spooled_at: datetime | None,
+    request_sha256: str,
+    document: Any,
+    payload: dict[str, Any],
+) -> tuple[Case, IdempotencyRecord]:
+    """The rows of one case, from its result payload (stored directly or spooled)."""
+    case = Case(
+        id=case_id,
+        event_id=event_id,
+        client_name=client_name,
+        received_at=received_at,
+        stored_at=stored_at,
+        spooled_at=spooled_at,
+        request_sha256=request_sha256,
+        notification=document,
+        result=payload,
+        models=payload["models"],
+        engine_version=payload["engine_version"],
+        iss15_plus=payload["triage"]["iss15_plus"],
+        probability=payload["triage"]["probability"],
+        occupants=[
+            CaseOccupant(
+                position=i,
+                seat=o["seat"],
+                impact_mode=o["impact_mode"],
+                method=o["method"],
+                iss15_plus=o["triage"]["iss15_plus"],
+                probability=o["triage"]["probability"],
+            )
+            for i, o in enumerate(payload["occupants"])
+        ],
+    )
+    record = IdempotencyRecord(
+        client_name=client_name,
+        event_id=event_id,
+        request_sha256=request_sha256,
+        case_id=case_id,
+        created_at=stored_at,
+    )
+    return case, record
+
+
+def store_spooled(ctx: ServiceContext, entry: SpoolEntry) -> None:
+    """Store one spooled case (the replayer's step); "already stored" counts as done.
+
+    Raises
+    ------
+    sqlalchemy.exc.DBAPIError
+        The store is still unavailable (the connection pool is reset).
+    """
+    case, record = _case_rows(
+        case_id=entry.case_id,
+        event_id=entry.event_id,
+        client_name=entry.client_name,
+        received_at=entry.received_at,
+        stored_at=datetime.now(UTC),
+        spooled_at=entry.spooled_at,
+        request_sha256=entry.request_sha256,
+        document=entry.notification,
+        payload=entry.result,
+    )
+    try:
+        with ctx.sessions.begin() as session:
+            repository.add_case(session, case, record)
+    except IntegrityError:
+        with ctx.sessions() as session:
+            existing = repository.get_idempotency_record(session, entry.client_name, entry.event_id)
+        if existing is None:
+            raise
+        if existing.case_id != entry.case_id:
+            # stored before the outage and re-sent while the store could not be read:
+            # the store keeps its case, the spooled duplicate is dropped
+            log.warning(
+                "spooled case dropped: its event was stored already",
+                extra={"case_id": entry.case_id, "stored_case_id": existing.case_id},
+            )
+        return
+    except STORE_ERRORS:
+        ctx.reset_store_connections()
+        raise
+    ctx.metrics.spool_replayed.inc()
+
+
+def _spool(
+    ctx: ServiceContext, entry: SpoolEntry, fingerprint: str, result: CaseResult
+) -> SubmitOutcome:
+    try:
+        recorded = ctx.spool.put(entry)
+    except SpoolError as exc:
+        log.error(
+            "the spool failed too: the case is not recorded",
+            extra={"case_id": entry.case_id, "error_type": type(exc.__cause__).__name__},
+        )
+        raise StoreUnavailable(
+            "Neither the audit store nor the local spool can record the case, so it is not "
+            "answered; re-send the same event_id."
+        ) from exc
+    if recorded is not entry:  # the same event was spooled first by a concurrent request
+        return _replay_spooled(recorded, fingerprint, ctx)
+    ctx.metrics.spooled.inc()
+    answer = result.model_copy(update={"stored": False, "spooled": True})
+    return SubmitOutcome(result=answer, replayed=False, spooled=True)
 
 
 def submit(
@@ -135,6 +294,10 @@ def submit(
 ) -> SubmitOutcome:
     """Triage a notification and store it, or replay the stored case of its event_id.
 
+    The case is committed before it is answered: to the store (201), or, when the
+    store is unavailable, to the local spool (202, `stored: false`, `spooled:
+    true`), from which it is stored later under the same case id.
+
     Parameters
     ----------
     ctx : ServiceContext
@@ -145,14 +308,34 @@ def submit(
     caller : Caller
     received_at : datetime
         When the request arrived (UTC).
+
+    Raises
+    ------
+    IdempotencyConflict
+        The event_id was submitted with a notification of another meaning.
+    StoreUnavailable
+        Neither the store nor the spool can record the case.
     """
     if ctx.models is None:
         raise RuntimeError("models are not loaded")
-    request_sha256 = canonical_sha256(document)
-    with ctx.sessions() as session:
-        record = repository.get_idempotency_record(session, caller.name, notification.event_id)
-    if record is not None:
-        return _replay_or_conflict(record, request_sha256, ctx)
+    fingerprint = notification_sha256(notification)
+    # cases stored before issue 24 carry the fingerprint of the document as received
+    fingerprints = (fingerprint, canonical_sha256(document))
+    store_up = True
+    try:
+        with ctx.sessions() as session:
+            record = repository.get_idempotency_record(session, caller.name, notification.event_id)
+        if record is not None:
+            return _replay_or_conflict(record, fingerprints, ctx)
+    except STORE_ERRORS:
+        store_up = False
+        ctx.reset_store_connections()
+    try:
+        waiting = ctx.spool.find(caller.name, notification.event_id)
+    except SpoolError:
+        waiting = None  # spooling fails too if it comes to that
+    if waiting is not None:
+        return _replay_spooled(waiting, fingerprint, ctx)
 
     case_id = str(uuid.uuid4())
     start = time.perf_counter()
@@ -160,38 +343,30 @@ def submit(
     ctx.metrics.engine_seconds.observe(time.perf_counter() - start)
 
     stored_at = datetime.now(UTC)
-    payload = result.model_dump(mode="json")
-    case = Case(
-        id=case_id,
+    payload = result.model_dump(mode="json", exclude={"stored", "spooled"})
+    entry = SpoolEntry(
+        seq=None,
+        client_name=caller.name,
+        event_id=notification.event_id,
+        request_sha256=fingerprint,
+        case_id=case_id,
+        received_at=received_at,
+        spooled_at=stored_at,
+        notification=document,
+        result=payload,
+    )
+    if not store_up:
+        return _spool(ctx, entry, fingerprint, result)
+    case, record = _case_rows(
+        case_id=case_id,
         event_id=notification.event_id,
         client_name=caller.name,
         received_at=received_at,
         stored_at=stored_at,
-        request_sha256=request_sha256,
-        notification=document,
-        result=payload,
-        models=payload["models"],
-        engine_version=result.engine_version,
-        iss15_plus=result.triage.iss15_plus,
-        probability=result.triage.probability,
-        occupants=[
-            CaseOccupant(
-                position=i,
-                seat=o.seat.value,
-                impact_mode=o.impact_mode,
-                method=o.method,
-                iss15_plus=o.triage.iss15_plus,
-                probability=o.triage.probability,
-            )
-            for i, o in enumerate(result.occupants)
-        ],
-    )
-    record = IdempotencyRecord(
-        client_name=caller.name,
-        event_id=notification.event_id,
-        request_sha256=request_sha256,
-        case_id=case_id,
-        created_at=stored_at,
+        spooled_at=None,
+        request_sha256=fingerprint,
+        document=document,
+        payload=payload,
     )
     try:
         with ctx.sessions.begin() as session:
@@ -204,7 +379,14 @@ def submit(
             )
         if existing is None:
             raise
-        return _replay_or_conflict(existing, request_sha256, ctx)
+        return _replay_or_conflict(existing, fingerprints, ctx)
+    except STORE_ERRORS as exc:
+        log.warning(
+            "the store failed; the case goes to the spool",
+            extra={"case_id": case_id, "error_type": type(exc).__name__},
+        )
+        ctx.reset_store_connections()
+        return _spool(ctx, entry, fingerprint, result)
     decision = "iss15_plus" if result.triage.iss15_plus else "not_iss15_plus"
     methods = {o.method for o in result.occupants}
     method = Method.LPM if Method.LPM in methods else Method.FIELD
@@ -248,8 +430,15 @@ def decode_cursor(cursor: str) -> tuple[datetime, str]:
         at = datetime.fromisoformat(at_text)
         if at.tzinfo is None or not isinstance(case_id, str):
             raise ValueError("malformed")
-        return at, case_id
-    except (ValueError, TypeError, binascii.Error, UnicodeDecodeError) as exc:
+        return at.astimezone(UTC), case_id
+    except (
+        ValueError,
+        TypeError,
+        OverflowError,
+        RecursionError,
+        binascii.Error,
+        UnicodeDecodeError,
+    ) as exc:
         raise InvalidCursor(
             "The cursor is not one this service issued.",
             errors=[FieldError(field="cursor", reason="not a valid cursor", type="cursor")],

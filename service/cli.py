@@ -2,12 +2,12 @@
 
 Commands::
 
-    aacn-triage serve [--host H] [--port P]
+    aacn-triage serve [--host H] [--port P] [--workers N]
     aacn-triage db upgrade [REV] | db downgrade REV | db current
-    aacn-triage keys create --role submitter|auditor|admin --name NAME
-    aacn-triage keys list
+    aacn-triage keys create --role submitter|auditor|admin|metrics --name NAME
+    aacn-triage keys list | keys revoke NAME|ID | keys rotate NAME|ID
     aacn-triage triage FILE.json
-    aacn-triage triage --batch IN.jsonl --out OUT.jsonl [--resume]
+    aacn-triage triage --batch IN.jsonl --out OUT.jsonl [--resume] [--workers N]
     aacn-triage simulate FILE.json [--plot OUT.png]
     aacn-triage build-surrogates [--family NAME] [--workers N] ...
     aacn-triage validate-surrogates [--n N] [--seed S] [--family NAME] ...
@@ -41,29 +41,45 @@ def _print(text: str, *, err: bool = False) -> None:
 def _settings() -> Any:
     from service.settings import get_settings
 
-    settings = get_settings()
-    if settings.numba_cache_dir is not None:
-        os.environ.setdefault("NUMBA_CACHE_DIR", str(settings.numba_cache_dir))
-    return settings
+    return get_settings()
 
 
 # ------------------------------------------------------------------- commands
 
 
 def _cmd_serve(args: argparse.Namespace) -> int:
+    """Serve HTTP with N worker processes (uvicorn's supervisor), each warmed before it
+    accepts connections; SIGTERM lets in-flight requests finish, then exits."""
     import uvicorn
 
-    from service.app import create_app
+    from service.logs import configure_logging, log_config
 
     settings = _settings()
     host = args.host or settings.host
     port = args.port or settings.port
+    workers = args.workers or settings.workers or os.cpu_count() or 1
+    configure_logging(settings.log_level)
+    if settings.auto_migrate:  # once, before the workers start
+        from service.db import migrate
+
+        migrate.upgrade(settings.database_url)
+    if workers > 1:
+        # compile the kernels into the shared numba cache once, so that every worker
+        # loads them instead of compiling them side by side
+        from models.lpm.simulate import warm_up
+
+        warm_up()
     uvicorn.run(
-        create_app(settings),
+        "service.app:create_app",
+        factory=True,
         host=host,
         port=port,
+        workers=workers,
         log_level=settings.log_level.lower(),
+        log_config=log_config(settings.log_level),
         proxy_headers=True,
+        server_header=False,
+        timeout_graceful_shutdown=settings.shutdown_timeout_s,
     )
     return 0
 
@@ -91,7 +107,7 @@ def _sessions() -> Any:
 
 
 def _cmd_keys(args: argparse.Namespace) -> int:
-    from service.auth import Role, create_api_key
+    from service.auth import Role, create_api_key, revoke_api_key, rotate_api_key
     from service.db import repository
 
     sessions = _sessions()
@@ -104,10 +120,29 @@ def _cmd_keys(args: argparse.Namespace) -> int:
         _print(f"created key {row.name!r} (role {row.role}); it is shown once:", err=True)
         _print(secret)
         return 0
+    if args.keys_command in ("revoke", "rotate"):
+        try:
+            if args.keys_command == "revoke":
+                row = revoke_api_key(sessions, args.key)
+                _print(f"revoked key {row.name!r} (id {row.id}); refused from now on", err=True)
+            else:
+                row, secret = rotate_api_key(sessions, args.key)
+                _print(
+                    f"rotated key {row.name!r} (id {row.id}); the old secret is refused from "
+                    "now on; the new one is shown once:",
+                    err=True,
+                )
+                _print(secret)
+        except LookupError as exc:
+            _print(f"error: {exc}", err=True)
+            return 1
+        return 0
     with sessions() as session:
         for key in repository.list_api_keys(session):
             state = "revoked" if key.revoked_at else "active"
-            _print(f"{key.name}\t{key.role}\t{key.key_prefix}...\t{state}\t{key.created_at}")
+            _print(
+                f"{key.id}\t{key.name}\t{key.role}\t{key.key_prefix}...\t{state}\t{key.created_at}"
+            )
     return 0
 
 
@@ -127,11 +162,14 @@ def _problem_from_validation(exc: ValidationError) -> dict[str, Any]:
 def _evaluate_text(text: str, models: Any) -> dict[str, Any]:
     """One notification (JSON text) -> {"result": ...} or {"error": problem}."""
     from service.cases_service import evaluate
+    from service.jsonbody import MalformedJson
     from service.problems import DomainError
     from service.schemas import CrashNotificationIn
 
     try:
-        notification = CrashNotificationIn.model_validate_json(text)
+        notification, _ = CrashNotificationIn.from_json(text)
+    except MalformedJson as exc:
+        return {"error": {"title": "Malformed JSON", "status": 400, "detail": str(exc)}}
     except ValidationError as exc:
         return {"error": _problem_from_validation(exc)}
     try:
@@ -170,16 +208,48 @@ def _cmd_triage(args: argparse.Namespace) -> int:
     if args.out is None:
         _print("error: --batch needs --out OUT.jsonl", err=True)
         return 2
-    return _run_batch(Path(args.batch), Path(args.out), models, resume=args.resume)
+    workers = args.workers or os.cpu_count() or 1
+    return _run_batch(Path(args.batch), Path(args.out), models, resume=args.resume, workers=workers)
 
 
-def _run_batch(src: Path, out: Path, models: Any, *, resume: bool) -> int:
-    """Evaluate a JSONL file line by line into OUT (one line per input line, in order).
+#: The engine models of a batch worker process (loaded once by `_init_batch_worker`).
+_BATCH_MODELS: Any = None
+#: Lines handed to a batch worker at a time. [R] Big enough that the pool's IPC is
+#: small beside ~10-50 ms of engine time per line, small enough to keep the bar live.
+BATCH_CHUNK = 8
 
-    With `resume`, the complete lines already in OUT are kept and skipped, so an
+
+def _init_batch_worker() -> None:
+    global _BATCH_MODELS
+    from service.context import engine_models_for
+
+    _BATCH_MODELS = engine_models_for(_settings())
+
+
+def _batch_line(item: tuple[int, str]) -> str:
+    number, text = item
+    if not text.strip():
+        record: dict[str, Any] = {"line": number, "error": {"title": "Empty line"}}
+    else:
+        record = {"line": number, **_evaluate_text(text, _BATCH_MODELS)}
+    return json.dumps(record, separators=(",", ":"))
+
+
+def _run_batch(src: Path, out: Path, models: Any, *, resume: bool, workers: int = 1) -> int:
+    """Evaluate a JSONL file into OUT (one line per input line, in order).
+
+    With `workers` > 1 the lines are triaged by a pool of processes (forked from this
+    one with its loaded models where the platform forks; else spawned, each loading
+    them once from the shared numba cache) and written back in input order. With
+    `resume`, the complete lines already in OUT are kept and skipped, so an
     interrupted run continues where it stopped; without it OUT is rewritten.
     """
+    import multiprocessing
+    from concurrent.futures import ProcessPoolExecutor
+
     from tqdm import tqdm
+
+    global _BATCH_MODELS
 
     lines = src.read_text(encoding="utf-8").splitlines()
     done = 0
@@ -196,20 +266,41 @@ def _run_batch(src: Path, out: Path, models: Any, *, resume: bool) -> int:
     elif out.exists():
         out.unlink()
     failures = 0
+    todo = list(enumerate(lines[done:], start=done + 1))
+    workers = max(1, min(workers, len(todo)))
     with (
         out.open("a", encoding="utf-8") as sink,
         tqdm(total=len(lines), initial=done, unit="case", file=sys.stderr, desc="triage") as bar,
     ):
-        for number, text in enumerate(lines[done:], start=done + 1):
-            if not text.strip():
-                record: dict[str, Any] = {"line": number, "error": {"title": "Empty line"}}
-            else:
-                record = {"line": number, **_evaluate_text(text, models)}
-            failures += "error" in record
-            sink.write(json.dumps(record, separators=(",", ":")) + "\n")
-            sink.flush()
-            bar.update(1)
-    _print(f"{len(lines) - done} evaluated, {failures} refused; results in {out}", err=True)
+        _BATCH_MODELS = models
+        if workers == 1:
+            results: Any = map(_batch_line, todo)
+            pool = None
+        elif "fork" in multiprocessing.get_all_start_methods():
+            # forked workers inherit the loaded, warmed models: no start-up per worker
+            pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("fork"))
+            results = pool.map(_batch_line, todo, chunksize=BATCH_CHUNK)
+        else:  # spawned workers load the models once each, from the shared numba cache
+            pool = ProcessPoolExecutor(
+                workers,
+                mp_context=multiprocessing.get_context("spawn"),
+                initializer=_init_batch_worker,
+            )
+            results = pool.map(_batch_line, todo, chunksize=BATCH_CHUNK)
+        try:
+            for line in results:
+                failures += '"error":' in line[:40]
+                sink.write(line + "\n")
+                sink.flush()
+                bar.update(1)
+        finally:
+            if pool is not None:
+                pool.shutdown(cancel_futures=True)
+    _print(
+        f"{len(todo)} evaluated by {workers} process{'es' if workers > 1 else ''}, "
+        f"{failures} refused; results in {out}",
+        err=True,
+    )
     return 0
 
 
@@ -433,6 +524,9 @@ def build_parser() -> argparse.ArgumentParser:
     serve = sub.add_parser("serve", help="run the HTTP service")
     serve.add_argument("--host", help="bind address (default AACN_HOST or 127.0.0.1)")
     serve.add_argument("--port", type=int, help="port (default AACN_PORT or 8000)")
+    serve.add_argument(
+        "--workers", type=int, help="worker processes (default AACN_WORKERS or the CPU count)"
+    )
     serve.set_defaults(func=_cmd_serve)
 
     db = sub.add_parser("db", help="database migrations")
@@ -447,9 +541,17 @@ def build_parser() -> argparse.ArgumentParser:
     keys = sub.add_parser("keys", help="API keys")
     keys_sub = keys.add_subparsers(dest="keys_command", required=True)
     create = keys_sub.add_parser("create", help="create a key and print it once")
-    create.add_argument("--role", required=True, choices=["submitter", "auditor", "admin"])
+    create.add_argument(
+        "--role", required=True, choices=["submitter", "auditor", "admin", "metrics"]
+    )
     create.add_argument("--name", required=True, help="client name, recorded with its cases")
-    keys_sub.add_parser("list", help="list keys (names, roles, prefixes)")
+    keys_sub.add_parser("list", help="list keys (ids, names, roles, prefixes)")
+    revoke = keys_sub.add_parser("revoke", help="revoke a key (refused at once)")
+    revoke.add_argument("key", help="the key's name or id")
+    rotate = keys_sub.add_parser(
+        "rotate", help="new secret for a key (same name and role); the old one is refused at once"
+    )
+    rotate.add_argument("key", help="the key's name or id")
     keys.set_defaults(func=_cmd_keys)
 
     tri = sub.add_parser("triage", help="triage notifications offline (no server, no database)")
@@ -457,6 +559,7 @@ def build_parser() -> argparse.ArgumentParser:
     tri.add_argument("--batch", help="JSON Lines input, one notification per line")
     tri.add_argument("--out", help="JSON Lines output (with --batch)")
     tri.add_argument("--resume", action="store_true", help="keep OUT's lines and continue")
+    tri.add_argument("--workers", type=int, help="processes for --batch (default: the CPU count)")
     tri.set_defaults(func=_cmd_triage)
 
     sim = sub.add_parser("simulate", help="run the occupant models of one notification")

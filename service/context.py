@@ -2,7 +2,11 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import logging
+import threading
+import time
+from dataclasses import dataclass, field
+from typing import Any
 
 from sqlalchemy import Engine
 from sqlalchemy.orm import Session, sessionmaker
@@ -10,12 +14,39 @@ from sqlalchemy.orm import Session, sessionmaker
 from models.triage import EngineModels, load_engine_models
 from service.metrics import Metrics
 from service.settings import Settings
+from service.spool import Spool
 
-__all__ = ["ServiceContext", "engine_models_for"]
+log = logging.getLogger("aacn_triage.store")
+
+#: Least seconds between two resets of the connection pool after store errors.
+#: [R] A reset opens fresh connections (one that was opened read-only, or to a
+#: server that restarted, is never reused); once a second is plenty under load.
+POOL_RESET_MIN_INTERVAL_S = 1.0
+
+__all__ = ["ServiceContext", "engine_models_for", "limit_blas_threads"]
+
+
+def limit_blas_threads(threads: int) -> None:
+    """Cap the BLAS threads of this process (numpy's OpenBLAS), already loaded or not.
+
+    The engine's matrix products are small (the surrogate propagation's largest is
+    about 1000 x 450 by 450 x 1000); with OpenBLAS's default of one thread per core
+    they were slower, and on a busy machine much slower: one triage of a
+    single-occupant notification took a median 48 ms with 2 threads against 12 ms
+    with 1 on this 2-core box at load average 7 (measured 2026-12-04). Serving
+    several worker processes also wants one thread each, not cores x cores.
+    """
+    from threadpoolctl import threadpool_limits  # type: ignore[import-untyped]
+
+    threadpool_limits(limits=threads, user_api="blas")
 
 
 def engine_models_for(settings: Settings) -> EngineModels:
-    """Load the engine models as the settings configure them (raises ValueError)."""
+    """Load the engine models as the settings configure them (raises ValueError).
+
+    Also caps this process's BLAS threads at `settings.blas_threads`.
+    """
+    limit_blas_threads(settings.blas_threads)
     return load_engine_models(
         threshold_override=settings.triage_threshold,
         operating_point=settings.operating_point,
@@ -39,6 +70,27 @@ class ServiceContext:
     sessions: sessionmaker[Session]
     metrics: Metrics
     models: EngineModels | None
+    spool: Spool
     models_error: str | None = None
     #: Signs the browser session cookies and CSRF tokens (``service.web_auth``).
     session_secret: bytes = b""
+
+    #: API keys seen valid: hash -> (caller, monotonic time). Used only while the
+    #: store cannot be read, so that spooling works through an outage.
+    key_cache: dict[str, tuple[Any, float]] = field(default_factory=dict)
+    _last_reset: float = 0.0
+    _reset_lock: threading.Lock = field(default_factory=threading.Lock)
+
+    def reset_store_connections(self) -> None:
+        """Drop pooled connections after a store error (at most once a second).
+
+        A connection opened while the database was read-only stays read-only, and
+        one to a server that restarted is dead; new ones are opened on next use.
+        """
+        with self._reset_lock:
+            now = time.monotonic()
+            if now - self._last_reset < POOL_RESET_MIN_INTERVAL_S:
+                return
+            self._last_reset = now
+        log.warning("store error: resetting the connection pool")
+        self.db_engine.dispose()

@@ -58,6 +58,16 @@ class Metrics:
             "POSTs answered from the idempotency record.",
             registry=self.registry,
         )
+        self.spooled = Counter(
+            "aacn_spooled_total",
+            "Cases recorded in the local spool because the store was unavailable.",
+            registry=self.registry,
+        )
+        self.spool_replayed = Counter(
+            "aacn_spool_replayed_total",
+            "Spooled cases this process stored once the store returned.",
+            registry=self.registry,
+        )
 
 
 def _handler_name(request: Request) -> str:

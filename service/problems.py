@@ -6,9 +6,12 @@ Error tree::
      + Unauthorized                  401 no or unknown API key
      + Forbidden                     403 the key's role may not do this
      + NotFound                      404
-     + IdempotencyConflict           409 same event_id, different body
+     + MalformedBody                 400 not one JSON document with unique keys
+     + IdempotencyConflict           409 same event_id, a body of another meaning
      + PayloadTooLarge               413
+     + UnsupportedMediaType          415 a body that is not application/json
      + UnprocessableNotification     422 valid JSON, impossible content
+     + StoreUnavailable              503 neither the store nor the spool can record
 
 Every handler answers ``application/problem+json`` with ``type``, ``title``,
 ``status``, ``detail`` and, for 422, ``errors``: one entry per offending field
@@ -25,6 +28,8 @@ from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
 from pydantic import BaseModel, Field
+from sqlalchemy.exc import DBAPIError
+from sqlalchemy.exc import TimeoutError as PoolTimeoutError
 from starlette.exceptions import HTTPException as StarletteHTTPException
 from starlette.routing import Match
 
@@ -34,16 +39,19 @@ __all__ = [
     "FieldError",
     "Forbidden",
     "IdempotencyConflict",
+    "MalformedBody",
     "NotFound",
     "PayloadTooLarge",
     "Problem",
+    "StoreUnavailable",
     "Unauthorized",
+    "UnsupportedMediaType",
     "UnprocessableNotification",
     "install_problem_handlers",
     "problem_response",
 ]
 
-log = logging.getLogger(__name__)
+log = logging.getLogger("aacn_triage.problems")
 
 PROBLEM_MEDIA_TYPE = "application/problem+json"
 _TYPE_BASE = "https://aacn-triage.example/problems/"
@@ -139,6 +147,22 @@ class EngineFailure(DomainError):
         super().__init__(detail)
         self.reference = reference
 
+class MalformedBody(DomainError):
+    status, slug, title = 400, "malformed-json", "Malformed JSON"
+
+
+class UnsupportedMediaType(DomainError):
+    status, slug, title = 415, "unsupported-media-type", "Unsupported media type"
+
+
+class StoreUnavailable(DomainError):
+    status, slug, title = 503, "store-unavailable", "Store unavailable"
+
+
+#: Seconds a client is asked to wait before retrying when the store is unavailable.
+#: [R] The spool replayer looks every second; a few seconds spares a failing database.
+RETRY_AFTER_S = 5
+
 
 def problem_response(
     status: int,
@@ -199,6 +223,8 @@ def install_problem_handlers(app: FastAPI) -> None:
     @app.exception_handler(DomainError)
     async def _domain(request: Request, exc: DomainError) -> JSONResponse:
         headers = {"WWW-Authenticate": "Bearer"} if exc.status == 401 else None
+        if exc.status == 503:
+            headers = {"Retry-After": str(RETRY_AFTER_S)}
         return problem_response(
             exc.status,
             exc.title,
@@ -247,9 +273,25 @@ def install_problem_handlers(app: FastAPI) -> None:
             headers=headers or None,
         )
 
+    async def _store(request: Request, exc: Exception) -> JSONResponse:
+        log.warning(
+            "store unavailable on %s", request.url.path, extra={"error_type": type(exc).__name__}
+        )
+        return problem_response(
+            503,
+            StoreUnavailable.title,
+            "The audit store is unavailable; retry later.",
+            slug=StoreUnavailable.slug,
+            instance=request.url.path,
+            headers={"Retry-After": str(RETRY_AFTER_S)},
+        )
+
+    app.add_exception_handler(DBAPIError, _store)
+    app.add_exception_handler(PoolTimeoutError, _store)
+
     @app.exception_handler(Exception)
     async def _unexpected(request: Request, exc: Exception) -> JSONResponse:
-        log.exception("unexpected error on %s", request.url.path)
+        log.error("unexpected error on %s", request.url.path, exc_info=exc)
         return problem_response(
             500,
             "Internal server error",

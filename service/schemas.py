@@ -8,15 +8,20 @@ y right); PDOF is in degrees clockwise from straight ahead (0 frontal,
 from __future__ import annotations
 
 import math
-from datetime import datetime
+import re
+from datetime import UTC, datetime, timedelta
 from typing import Annotated, Any, Literal
 
 from pydantic import (
+    AfterValidator,
     AwareDatetime,
     BaseModel,
+    BeforeValidator,
     ConfigDict,
     Field,
     StringConstraints,
+    TypeAdapter,
+    ValidationError,
     model_validator,
 )
 
@@ -28,9 +33,12 @@ from models.impact_mode import ImpactMode
 from models.pulse import haversine, haversine_amplitude_g
 from models.triage import IntervalMethod, Method
 from service.examples import EXAMPLE_CASE_LIST, EXAMPLE_CASE_RESULT, EXAMPLE_STORED_CASE
+from service.jsonbody import loads_strict
 
 __all__ = [
     "EXAMPLE_NOTIFICATIONS",
+    "MAX_CLOCK_SKEW",
+    "MIN_OCCURRED_AT",
     "AccelerationPulseIn",
     "CaseList",
     "CaseResult",
@@ -38,6 +46,7 @@ __all__ = [
     "CrashNotificationIn",
     "DeltaVPulseIn",
     "OccupantIn",
+    "Rfc3339Text",
     "StoredCase",
     "SummaryPulseIn",
     "VehicleIn",
@@ -54,6 +63,57 @@ MIN_EDR_INTERVAL_MS, MAX_EDR_INTERVAL_MS = limits.MIN_EDR_INTERVAL_MS, limits.MA
 #: Hybrid III anthropometry used to map stature and mass to the nearer dummy
 #: (defined once in the engine).
 DUMMY_STATURE_MASS = engine.DUMMY_STATURE_MASS
+#: Earliest accepted crash time. [R] No telematics unit or event data recorder in
+#: service reports crashes from before 1990; earlier dates are clock or typing
+#: errors (a unit whose clock never set reports 1970-01-01, a fuzzer 0001-01-01).
+MIN_OCCURRED_AT = datetime(1990, 1, 1, tzinfo=UTC)
+#: Clock-skew allowance: a crash may be reported up to this far in the future of
+#: the service's clock. [R] Telematics units set their clocks from GNSS (well under
+#: a second); 10 minutes covers a call center or service host whose NTP drifted.
+MAX_CLOCK_SKEW = timedelta(minutes=10)
+
+#: An RFC 3339 date-time with its offset ("2026-11-23T08:15:30Z"). pydantic alone
+#: takes a bare number, or a string of digits, as a Unix time (fuzzing findings:
+#: ``occurred_at: 0`` or ``"1"``; ``received_from=0.5`` listed every case).
+_RFC3339 = re.compile(r"^\d{4}-\d{2}-\d{2}[Tt ]\d{2}:\d{2}")
+
+
+_LAX_AWARE = TypeAdapter(AwareDatetime)
+
+
+def _rfc3339_text(value: object) -> datetime:
+    """Parse RFC 3339 text here (strict mode would refuse text handed on as a str)."""
+    if isinstance(value, datetime):  # already parsed (a model built in Python)
+        return value
+    if not (isinstance(value, str) and _RFC3339.match(value)):
+        raise ValueError(
+            "must be an RFC 3339 date-time with a UTC offset, e.g. 2026-11-23T08:15:30Z"
+        )
+    try:
+        return _LAX_AWARE.validate_python(value)
+    except ValidationError as exc:
+        raise ValueError(exc.errors()[0]["msg"]) from None
+
+
+def _utc(value: datetime) -> datetime:
+    try:
+        return value.astimezone(UTC)
+    except OverflowError as exc:  # 0001-01-01T00:00+14:00 has no UTC instant
+        raise ValueError("the date-time is out of range once converted to UTC") from exc
+
+
+#: An aware date-time given as RFC 3339 text, converted to UTC.
+Rfc3339Text = Annotated[AwareDatetime, BeforeValidator(_rfc3339_text), AfterValidator(_utc)]
+
+
+def _plausible_crash_time(value: datetime) -> datetime:
+    latest = datetime.now(UTC) + MAX_CLOCK_SKEW
+    if not MIN_OCCURRED_AT <= value <= latest:
+        raise ValueError(
+            f"must lie between {MIN_OCCURRED_AT:%Y-%m-%d} and now plus "
+            f"{int(MAX_CLOCK_SKEW.total_seconds() // 60)} minutes of clock skew"
+        )
+    return value
 
 
 class WireModel(BaseModel):
@@ -481,7 +541,10 @@ class CrashNotificationIn(WireModel):
         description="The sender's unique id of the crash event (printable ASCII, no spaces). "
         "Re-sending the same event_id with the same body returns the original case.",
     )
-    occurred_at: AwareDatetime = Field(description="Time of the crash, RFC 3339 with offset.")
+    occurred_at: Annotated[Rfc3339Text, AfterValidator(_plausible_crash_time)] = Field(
+        description="Time of the crash, RFC 3339 with offset; from 1990 to the service's "
+        "clock plus 10 minutes of clock-skew allowance."
+    )
     vehicle: VehicleIn = Field(default_factory=VehicleIn, description="The vehicle.")
     crash: CrashIn = Field(description="The crash measurements.")
     occupants: list[OccupantIn] = Field(
@@ -494,6 +557,24 @@ class CrashNotificationIn(WireModel):
     model_config = ConfigDict(
         json_schema_extra={"examples": [EXAMPLE_NOTIFICATIONS["summary"]["value"]]}
     )
+
+    @classmethod
+    def from_json(cls, raw: bytes | str) -> tuple[CrashNotificationIn, Any]:
+        """Validate a notification's JSON text strictly; also return the parsed document.
+
+        Duplicate keys are refused before pydantic (`service.jsonbody.MalformedJson`);
+        then pydantic's strict JSON mode: a number is not taken from a string
+        (``"56"``), a boolean not from a number (``1``) or a word (``"yes"``).
+
+        Raises
+        ------
+        service.jsonbody.MalformedJson
+            Not one JSON document with unique keys.
+        pydantic.ValidationError
+            A field refused.
+        """
+        document = loads_strict(raw)
+        return cls.model_validate_json(raw, strict=True), document
 
     @model_validator(mode="after")
     def _unique_seats(self) -> CrashNotificationIn:
@@ -736,6 +817,17 @@ class CaseResult(OutModel):
     engine_version: str = Field(description="Version of the engine code.")
     models: dict[str, ModelVersionOut] = Field(description="Every model used: version, sha256.")
     timings_ms: dict[str, float] = Field(description="Time spent per step, ms.")
+    stored: bool = Field(
+        default=True,
+        description="The case is committed to the audit store (201, and replays of a stored "
+        "case). False with `spooled`: the store could not take it (database down, read-only or "
+        "full), so the case was recorded durably in the service's local spool and answered "
+        "with 202; it is stored, under this `case_id`, once the store returns.",
+    )
+    spooled: bool = Field(
+        default=False,
+        description="The case is recorded in the local spool, waiting to be stored (202).",
+    )
 
 
 class StoredCase(OutModel):

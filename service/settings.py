@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from functools import lru_cache
 from pathlib import Path
+from typing import Literal
 
 from pydantic import Field, SecretStr
 from pydantic_settings import BaseSettings, SettingsConfigDict
@@ -71,7 +72,10 @@ class Settings(BaseSettings):
         "Artifacts that fail verification leave the service not ready.",
     )
     numba_cache_dir: Path | None = Field(
-        default=None, description="Directory for numba's compiled-kernel cache (NUMBA_CACHE_DIR)."
+        default=None,
+        description="Directory of numba's compiled-kernel cache, shared by every process; "
+        "None: the user's cache directory (`service.numba_cache`), never the installed "
+        "package. Read from the environment before numba is imported.",
     )
     session_secret: SecretStr | None = Field(
         default=None,
@@ -88,7 +92,55 @@ class Settings(BaseSettings):
         description="Lifetime of a browser session of the case pages, s (not renewed by use).",
     )
     log_level: str = Field(default="INFO", description="Python logging level.")
-    docs_enabled: bool = Field(default=True, description="Serve /docs and /openapi.json.")
+    docs_enabled: bool = Field(
+        default=True, description="Serve /docs (bundled Swagger UI, no CDN) and /openapi.json."
+    )
+    blas_threads: int = Field(
+        default=1,
+        ge=1,
+        description="BLAS threads per process for the engine's matrix products (one: they are "
+        "small, and several worker processes share the cores; `service.context`).",
+    )
+    workers: int | None = Field(
+        default=None, ge=1, description="Worker processes of `serve`; None: the CPU count."
+    )
+    shutdown_timeout_s: float = Field(
+        default=30.0,
+        gt=0.0,
+        description="On SIGTERM, seconds in-flight requests get to finish before the process "
+        "exits (new connections are refused at once).",
+    )
+    spool_path: Path | None = Field(
+        default=None,
+        description="The local spool (SQLite, fsync'd) that records cases while the store "
+        "cannot (202 `spooled`); replayed into the store in order once it returns. None: "
+        "`aacn-spool.db` beside a SQLite store, else in the working directory. Put it on "
+        "another volume than a SQLite store to outlive that disk filling up.",
+    )
+    spool_replay_interval_s: float = Field(
+        default=1.0, gt=0.0, description="Seconds between looks at the spool for cases to store."
+    )
+    ready_while_spooling: bool = Field(
+        default=True,
+        description="/readyz answers 200 (status `degraded`) while the store is unwritable but "
+        "the spool records cases, so a load balancer keeps sending notifications; false: 503.",
+    )
+    metrics_access: Literal["open", "key"] = Field(
+        default="open",
+        description="`/metrics` open to anyone who reaches it, or only with an API key of "
+        "role metrics or admin.",
+    )
+
+    def resolved_spool_path(self) -> Path:
+        """`spool_path`, or its default (see the field)."""
+        if self.spool_path is not None:
+            return self.spool_path
+        from sqlalchemy.engine import make_url
+
+        url = make_url(self.database_url)
+        if url.get_backend_name() == "sqlite" and url.database not in (None, "", ":memory:"):
+            return Path(str(url.database)).with_name("aacn-spool.db")
+        return Path("aacn-spool.db")
 
 
 @lru_cache(maxsize=1)

@@ -57,6 +57,8 @@ def _free_port() -> int:
 class _Cluster:
     admin_url: str
     stop: Callable[[], None]
+    #: ``pg_ctl(*args)`` on this cluster, e.g. ``("stop", "-m", "fast")``, ``("start",)``
+    pg_ctl: Callable[..., None]
 
 
 def _start_cluster() -> _Cluster:
@@ -90,8 +92,7 @@ def _start_cluster() -> _Cluster:
             [*prefix, *cmd], check=True, capture_output=True, text=True, timeout=120, cwd=root
         )
 
-    try:
-        run(str(pg_bin / "initdb"), "-D", str(data), "-A", "trust", "-U", user, "-E", "UTF8")
+    def pg_ctl(command: str, *options: str) -> None:
         run(
             str(pg_bin / "pg_ctl"),
             "-D",
@@ -103,8 +104,13 @@ def _start_cluster() -> _Cluster:
             "60",
             "-o",
             f"-c listen_addresses=127.0.0.1 -p {port} -k {root} -c fsync=off",
-            "start",
+            command,
+            *options,
         )
+
+    try:
+        run(str(pg_bin / "initdb"), "-D", str(data), "-A", "trust", "-U", user, "-E", "UTF8")
+        pg_ctl("start")
     except subprocess.CalledProcessError as exc:
         shutil.rmtree(root, ignore_errors=True)
         raise RuntimeError(f"could not start PostgreSQL: {exc.stderr.strip()[-500:]}") from exc
@@ -115,7 +121,9 @@ def _start_cluster() -> _Cluster:
         finally:
             shutil.rmtree(root, ignore_errors=True)
 
-    return _Cluster(admin_url=f"postgresql+psycopg://{user}@127.0.0.1:{port}/postgres", stop=stop)
+    return _Cluster(
+        admin_url=f"postgresql+psycopg://{user}@127.0.0.1:{port}/postgres", stop=stop, pg_ctl=pg_ctl
+    )
 
 
 @pytest.fixture(scope="session")
@@ -133,6 +141,24 @@ def postgres_admin_url() -> Iterator[str]:
         yield cluster.admin_url
     finally:
         cluster.stop()
+
+
+@pytest.fixture
+def own_postgres() -> Iterator[_Cluster]:
+    """A PostgreSQL cluster of the test's own, which the test may stop and start."""
+    if os.environ.get("AACN_TEST_POSTGRES_URL"):
+        pytest.skip("needs a cluster the test can stop: unset AACN_TEST_POSTGRES_URL")
+    try:
+        cluster = _start_cluster()
+    except (RuntimeError, OSError, subprocess.SubprocessError) as exc:
+        pytest.skip(f"PostgreSQL tests skipped: {exc}")
+    try:
+        yield cluster
+    finally:
+        try:
+            cluster.stop()
+        except subprocess.CalledProcessError:  # stopped by the test already
+            pass
 
 
 @pytest.fixture
@@ -163,7 +189,8 @@ def sqlite_url(tmp_path: Path) -> str:
 # ---------------------------------------------------------------------- app
 
 
-def _api(url: str, **overrides: object) -> Iterator[ApiClient]:
+def _api(url: str, spool_dir: Path, **overrides: object) -> Iterator[ApiClient]:
+    overrides.setdefault("spool_path", spool_dir / "spool.db")
     settings = Settings(database_url=url, **overrides)  # type: ignore[arg-type]
     app = create_app(settings)
     with TestClient(app) as client:
@@ -177,16 +204,16 @@ def _api(url: str, **overrides: object) -> Iterator[ApiClient]:
 
 
 @pytest.fixture
-def api(sqlite_url: str) -> Iterator[ApiClient]:
+def api(sqlite_url: str, tmp_path: Path) -> Iterator[ApiClient]:
     """The app on a fresh SQLite file, with keys for every role."""
-    yield from _api(sqlite_url)
+    yield from _api(sqlite_url, tmp_path)
 
 
 @pytest.fixture(params=["sqlite", pytest.param("postgres", marks=pytest.mark.postgres)])
 def api_any_db(request: pytest.FixtureRequest, tmp_path: Path) -> Iterator[ApiClient]:
     """The app on SQLite and on PostgreSQL."""
     if request.param == "sqlite":
-        yield from _api(f"sqlite:///{tmp_path / 'aacn.db'}")
+        yield from _api(f"sqlite:///{tmp_path / 'aacn.db'}", tmp_path)
     else:
         url = request.getfixturevalue("postgres_url")
-        yield from _api(url)
+        yield from _api(url, tmp_path)

@@ -58,3 +58,31 @@ def assert_problem(response: Any, status: int) -> dict[str, Any]:
         assert member in body, f"problem lacks {member}: {body}"
     assert body["status"] == status
     return body
+
+
+def free_port() -> int:
+    """A free loopback TCP port."""
+    import socket
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+def wait_ready(base: str, server: Any, log_path: Any, timeout_s: float = 120.0) -> None:
+    """Wait until `base`/readyz answers 200 (a cold start on a busy machine is slow)."""
+    import time
+
+    import httpx2 as httpx
+
+    deadline = time.monotonic() + timeout_s
+    while time.monotonic() < deadline:
+        try:
+            if httpx.get(base + "/readyz", timeout=1.0).status_code == 200:
+                return
+        except httpx.TransportError:
+            pass
+        if server.poll() is not None:
+            raise AssertionError(f"server exited: {log_path.read_text()[-3000:]}")
+        time.sleep(0.1)
+    raise AssertionError(f"server never became ready: {log_path.read_text()[-3000:]}")

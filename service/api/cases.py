@@ -2,29 +2,28 @@
 
 from __future__ import annotations
 
-import json
-import re
 from datetime import UTC, datetime
 from enum import StrEnum
 from typing import Annotated, Any
 
-from fastapi import APIRouter, Body, Path, Query, Request
+from fastapi import APIRouter, Path, Query, Request
 from fastapi.concurrency import run_in_threadpool
+from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
-from pydantic import AwareDatetime, BeforeValidator
+from pydantic import ValidationError
 
 from service import cases_service
 from service.api.deps import ContextDep
 from service.auth import require_auditor, require_submitter
 from service.db.repository import CaseFilters
-from service.problems import PROBLEM_MEDIA_TYPE, Problem
-from service.schemas import (
-    EXAMPLE_NOTIFICATIONS,
-    CaseList,
-    CaseResult,
-    CrashNotificationIn,
-    StoredCase,
+from service.jsonbody import MalformedJson
+from service.problems import (
+    PROBLEM_MEDIA_TYPE,
+    MalformedBody,
+    Problem,
+    UnsupportedMediaType,
 )
+from service.schemas import CaseList, CaseResult, CrashNotificationIn, Rfc3339Text, StoredCase
 
 __all__ = ["router"]
 
@@ -49,21 +48,19 @@ class ImpactModeFilter(StrEnum):
 
 CaseId = Annotated[str, Path(description="Case id (UUID).", max_length=64)]
 
-#: An RFC 3339 date-time with its offset ("2026-11-23T08:15:30Z"); pydantic alone
-#: would also take a bare number as a Unix time (found by a schemathesis run:
-#: ``received_from=0.5`` listed every case).
-_RFC3339 = re.compile(r"^\d{4}-\d{2}-\d{2}[Tt ]\d{2}:\d{2}")
+QueryTime = Rfc3339Text
+
+#: Longest accepted `cursor`: an issued one is about 110 characters (base64 of an
+#: RFC 3339 time and a UUID); a bound keeps crafted ones (1,100 nested brackets
+#: overflowed the JSON parser's recursion, a fuzzing finding) out of the parser.
+MAX_CURSOR_CHARS = 256
 
 
-def _rfc3339_text(value: object) -> object:
-    if not (isinstance(value, str) and _RFC3339.match(value)):
-        raise ValueError(
-            "must be an RFC 3339 date-time with a UTC offset, e.g. 2026-11-23T08:15:30Z"
-        )
-    return value
-
-
-QueryTime = Annotated[AwareDatetime, BeforeValidator(_rfc3339_text)]
+def _json_media_type(request: Request) -> bool:
+    media = request.headers.get("content-type", "").split(";", 1)[0].strip().lower()
+    return media == "application/json" or (
+        media.startswith("application/") and media.endswith("+json")
+    )
 
 
 @router.post(
@@ -72,30 +69,53 @@ QueryTime = Annotated[AwareDatetime, BeforeValidator(_rfc3339_text)]
     summary="Triage a crash notification",
     response_model=CaseResult,
     responses={
-        200: {"model": CaseResult, "description": "Replay of the event's stored case."},
-        **_problems(400, 401, 403, 409, 413, 422),
+        200: {"model": CaseResult, "description": "Replay of the event's case."},
+        202: {
+            "model": CaseResult,
+            "description": "Triaged, and recorded in the local spool because the audit "
+            "store is unavailable (`stored: false`, `spooled: true`); stored later under the "
+            "same case id.",
+        },
+        **_problems(400, 401, 403, 409, 413, 415, 422, 503),
     },
 )
 async def create_case(
     request: Request,
-    notification: Annotated[CrashNotificationIn, Body(openapi_examples=EXAMPLE_NOTIFICATIONS)],
     caller: require_submitter,
     ctx: ContextDep,
 ) -> JSONResponse:
     """Triage every occupant, store the case, and answer with the case result.
 
-    Re-sending an `event_id` with the same body answers the stored case with
-    status 200 and `Idempotent-Replayed: true`; with another body, 409.
+    The key is checked before the body is read. The body must be
+    `application/json` (else 415), one JSON document without repeated keys (else
+    400), with strict types: numbers as JSON numbers, booleans as `true`/`false`,
+    times as RFC 3339 text (else 422).
+
+    Re-sending an `event_id` with a notification of the same meaning (`56` and
+    `56.0` alike, defaults written out or not) answers the case with status 200 and
+    `Idempotent-Replayed: true`; with another, 409. When the audit store is
+    unavailable, the case is recorded in the local spool and answered with 202.
     """
     received_at = datetime.now(UTC)
-    document = json.loads(await request.body())
+    if not _json_media_type(request):
+        raise UnsupportedMediaType("Send the notification as `Content-Type: application/json`.")
+    raw = await request.body()
+    try:
+        notification, document = CrashNotificationIn.from_json(raw)
+    except MalformedJson as exc:
+        raise MalformedBody(f"The request body is not valid JSON: {exc}") from exc
+    except ValidationError as exc:
+        raise RequestValidationError(
+            [{**e, "loc": ("body", *e["loc"])} for e in exc.errors()]
+        ) from exc
     outcome = await run_in_threadpool(
         cases_service.submit, ctx, notification, document, caller, received_at
     )
     case_id = outcome.result.case_id
+    status = 200 if outcome.replayed else 202 if outcome.spooled else 201
     return JSONResponse(
         outcome.result.model_dump(mode="json"),
-        status_code=200 if outcome.replayed else 201,
+        status_code=status,
         headers={
             "Location": f"/v1/cases/{case_id}",
             "Idempotent-Replayed": "true" if outcome.replayed else "false",
@@ -126,7 +146,10 @@ def list_cases(
     limit: Annotated[
         int | None, Query(ge=1, description="Page size; capped at the configured maximum.")
     ] = None,
-    cursor: Annotated[str | None, Query(description="`next_cursor` of the previous page.")] = None,
+    cursor: Annotated[
+        str | None,
+        Query(max_length=MAX_CURSOR_CHARS, description="`next_cursor` of the previous page."),
+    ] = None,
     received_from: Annotated[
         QueryTime | None,
         Query(description="Only cases received at or after this time (RFC 3339, with offset)."),

@@ -6,10 +6,10 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from datetime import datetime
 
-from sqlalchemy import and_, exists, or_, select, text
+from sqlalchemy import and_, exists, or_, select, text, update
 from sqlalchemy.orm import Session, selectinload
 
-from service.db.tables import ApiKey, Case, CaseOccupant, IdempotencyRecord
+from service.db.tables import ApiKey, Case, CaseOccupant, HealthProbe, IdempotencyRecord
 
 __all__ = [
     "CaseFilters",
@@ -17,18 +17,31 @@ __all__ = [
     "add_case",
     "find_active_key",
     "get_active_key_by_id",
+
+    "get_api_key",
     "get_api_key_by_name",
     "get_case",
     "get_idempotency_record",
     "list_api_keys",
     "list_cases",
     "ping",
+    "probe_write",
+    "revoke_api_key",
+    "rotate_api_key",
 ]
 
 
 def ping(session: Session) -> None:
     """Round trip to the database (readiness)."""
     session.execute(text("SELECT 1"))
+
+
+def probe_write(session: Session, at: datetime) -> None:
+    """Rewrite the health probe row (readiness: the caller commits it)."""
+    done = session.execute(update(HealthProbe).where(HealthProbe.id == 1).values(checked_at=at))
+    if getattr(done, "rowcount", 0) == 0:
+        session.add(HealthProbe(id=1, checked_at=at))
+    session.flush()
 
 
 # ------------------------------------------------------------------ API keys
@@ -56,6 +69,26 @@ def get_api_key_by_name(session: Session, name: str) -> ApiKey | None:
 
 def list_api_keys(session: Session) -> Sequence[ApiKey]:
     return session.scalars(select(ApiKey).order_by(ApiKey.id)).all()
+
+
+def get_api_key(session: Session, name_or_id: str) -> ApiKey | None:
+    """A key by its name, or by its numeric id."""
+    key = get_api_key_by_name(session, name_or_id)
+    if key is None and name_or_id.isdigit():
+        key = session.get(ApiKey, int(name_or_id))
+    return key
+
+
+def revoke_api_key(session: Session, key: ApiKey, at: datetime) -> None:
+    key.revoked_at = at
+    session.flush()
+
+
+def rotate_api_key(session: Session, key: ApiKey, *, key_prefix: str, key_sha256: str) -> None:
+    """Replace a key's secret in place (same name and role; the old secret stops at once)."""
+    key.key_prefix = key_prefix
+    key.key_sha256 = key_sha256
+    session.flush()
 
 
 # --------------------------------------------------------------------- cases

@@ -21,7 +21,15 @@ from sqlalchemy import (
 )
 from sqlalchemy.orm import DeclarativeBase, Mapped, mapped_column, relationship
 
-__all__ = ["ApiKey", "Base", "Case", "CaseOccupant", "IdempotencyRecord", "UTCDateTime"]
+__all__ = [
+    "ApiKey",
+    "Base",
+    "Case",
+    "CaseOccupant",
+    "HealthProbe",
+    "IdempotencyRecord",
+    "UTCDateTime",
+]
 
 #: Constraint names that migrations can rely on (fastapi-best-practices, polar).
 NAMING_CONVENTION = {
@@ -82,6 +90,9 @@ class Case(Base):
     client_name: Mapped[str] = mapped_column(String(100))
     received_at: Mapped[datetime]
     stored_at: Mapped[datetime]
+    #: When the case was recorded in the local spool because the store failed (None:
+    #: stored directly); `stored_at` is then when the spool was replayed into the store.
+    spooled_at: Mapped[datetime | None]
     request_sha256: Mapped[str] = mapped_column(String(64))
     notification: Mapped[dict[str, Any]]
     result: Mapped[dict[str, Any]]
@@ -128,3 +139,12 @@ class IdempotencyRecord(Base):
     created_at: Mapped[datetime]
 
     __table_args__ = (UniqueConstraint("client_name", "event_id"),)
+
+
+class HealthProbe(Base):
+    """One row that readiness rewrites: a committed write proves the store writable."""
+
+    __tablename__ = "health_probe"
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True, autoincrement=False)
+    checked_at: Mapped[datetime]

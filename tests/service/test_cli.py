@@ -45,7 +45,7 @@ def test_keys_create_prints_the_key_once_and_stores_only_a_hash(
 
 def test_db_upgrade_downgrade_current(env_db: str, capsys: pytest.CaptureFixture[str]) -> None:
     assert cli.main(["db", "upgrade"]) == 0
-    assert "revision 0001" in capsys.readouterr().out
+    assert "revision 0002" in capsys.readouterr().out
     assert cli.main(["db", "downgrade", "base"]) == 0
     assert "revision base" in capsys.readouterr().out
 
@@ -103,6 +103,29 @@ def test_batch_writes_one_line_per_input_and_resumes(tmp_path: Path) -> None:
                 a["result"].pop(k)
                 b["result"].pop(k)
         assert a == b
+
+
+def test_batch_pool_matches_one_process(tmp_path: Path) -> None:
+    """`--workers 2` (a process pool) writes what one process writes, in input order."""
+    bodies = [summary(dv, pdof) for dv in (12, 33, 51, 70) for pdof in (0, 90, 180)]
+    src = tmp_path / "in.jsonl"
+    src.write_text(
+        "".join(json.dumps(b) + "\n" for b in bodies) + '{"event_id": 1, "event_id": 2}\n'
+    )
+    outs = []
+    for workers in ("1", "2"):
+        out = tmp_path / f"out{workers}.jsonl"
+        argv = ["triage", "--batch", str(src), "--out", str(out), "--workers", workers]
+        assert cli.main(argv) == 0
+        records = [json.loads(x) for x in out.read_text().splitlines()]
+        for r in records:
+            if "result" in r:
+                r["result"].pop("received_at")
+                r["result"].pop("timings_ms")
+        outs.append(records)
+    assert [r["line"] for r in outs[1]] == list(range(1, len(bodies) + 2))
+    assert outs[1][-1]["error"]["status"] == 400, "duplicate keys refused in batches too"
+    assert outs[0] == outs[1]
 
 
 def _free_port() -> int:

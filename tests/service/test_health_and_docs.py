@@ -29,16 +29,21 @@ def test_livez_and_readyz(api: ApiClient) -> None:
     assert ready.json()["models"]["baseline"]["sha256"]
 
 
-def test_readyz_is_503_when_the_database_is_unreachable() -> None:
-    # a closed loopback port: nothing listens there
+def test_readyz_is_503_when_the_database_is_unreachable(tmp_path: Path) -> None:
+    # a closed loopback port: nothing listens there; and the spool cannot be written
+    blocker = tmp_path / "not-a-directory"
+    blocker.write_text("")
     settings = Settings(
         database_url="postgresql+psycopg://nobody@127.0.0.1:9/none?connect_timeout=2",
         auto_migrate=False,
+        spool_path=blocker / "spool.db",
     )
     with TestClient(create_app(settings)) as client:
         assert client.get("/livez").status_code == 200, "liveness checks no dependency"
         problem = assert_problem(client.get("/readyz"), 503)
-        assert "database unreachable" in problem["detail"]
+        assert "store not writable (OperationalError)" in problem["detail"]
+        assert "spool failing" in problem["detail"]
+        assert "127.0.0.1" not in problem["detail"], "no internal host names"
 
 
 def test_metrics_count_requests_decisions_and_engine_time(api: ApiClient) -> None:

@@ -11,7 +11,7 @@ from service.db import migrate
 from service.db.session import make_engine
 from service.db.tables import Base
 
-TABLES = {"api_keys", "cases", "case_occupants", "idempotency_records"}
+TABLES = {"api_keys", "cases", "case_occupants", "idempotency_records", "health_probe"}
 
 
 @pytest.fixture(params=["sqlite", pytest.param("postgres", marks=pytest.mark.postgres)])
