@@ -7,9 +7,10 @@ from typing import Any
 import numpy as np
 import pytest
 
+from models.offline.surrogate.kriging_fit import fit_residual_kriging
 from models.offline.surrogate.report import without_kriging
 from models.surrogate.evaluate import SurrogateLibrary, default_artifact_dir
-from models.surrogate.kriging import ResidualKriging, fit_residual_kriging
+from models.surrogate.kriging import ResidualKriging
 from models.surrogate.spec import INPUT_NAMES
 
 

@@ -46,6 +46,7 @@ import numpy.typing as npt
 
 from models import ENGINE_VERSION
 from models.offline.surrogate.fit import MAX_DEGREE, SparseFit, fit_adaptive, fit_degree
+from models.offline.surrogate.kriging_fit import fit_residual_kriging
 from models.offline.surrogate.runs import (
     ISS15_DECISION_PROBABILITY,
     LpmRuns,
@@ -59,7 +60,6 @@ from models.surrogate.basis import (
     hyperbolic_multi_indices,
     stieltjes,
 )
-from models.surrogate.kriging import fit_residual_kriging
 from models.surrogate.spec import (
     DELTA_V_PIECES_KMH,
     HEAD_CLEARANCE,
@@ -484,7 +484,7 @@ def _fit_kriging(
     max_runs : int
         The first `max_runs` finite rows are used (:attr:`BuildConfig.kriging_max_runs`).
     """
-    from models.surrogate.evaluate import _piece
+    from models.surrogate.pieces import _piece
 
     fitted = tuple(o for o in spec.outputs if o != "p_iss15")
     base = _piece(piece_arrays, fitted, prefix, piece_meta)
