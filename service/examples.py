@@ -131,11 +131,11 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         },
         "lpm_parameters:compact_sedan": {
             "version": "compact_sedan",
-            "sha256": "9d737f0495a54a12be6138e2dcd68ca87608e70016c9fb2841185d83c0220b78",
+            "sha256": "323db6162859586c8b689d25989c7ea47c485bca2a83e070da434c306ff5ac75",
         },
         "lpm_code": {
             "version": "0.2.0",
-            "sha256": "26d8c71553e1c21dab8e8e23483a868cb6a8d46ab18bcd9d1b3eaac28d35120e",
+            "sha256": "620726f8510f2e6e2f68efec65f34daa1cf2fa5e8cc566a538ef4c74bdbdd3f9",
         },
         "triage_code": {
             "version": "0.2.0",
@@ -147,14 +147,16 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         },
         "surrogates": {
             "version": "6.0.2.0",
-            "sha256": "968ec93dc1d1be545b9825c99c258516615aa85c6d88b0c4213280eb5c31aa74",
+            "sha256": "12a879da7cb78f25b7fe5db8c34d496619609babe7813c545240f9572dc4a04b",
         },
         "surrogate_evaluation": {
             "version": "7",
-            "sha256": "6e678c22c79b1d7b01e6dc32b68fa5497cadb14d619037e6389b1fb99ef61dc8",
+            "sha256": "b7282b69b38f89dc15c0aebad18abff71b20e4d9063672a610f3b93f3176d21f",
         },
     },
-    "timings_ms": {"pulse": 0.07, "occupants": 10.03, "field_model": 0.08, "engine_total": 10.11},
+    "timings_ms": {"pulse": 0.09, "occupants": 38.09, "field_model": 0.08, "engine_total": 38.18},
+    "stored": True,
+    "spooled": False,
 }
 
 #: `GET /v1/cases/{case_id}`.

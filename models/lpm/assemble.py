@@ -14,14 +14,17 @@ given at mid track in the parameter set; a seat moved forward by
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field, replace
+from typing import Any
 
 import numpy as np
 import numpy.typing as npt
 
 from models.impact_mode import ImpactMode
 from models.lpm import kernel as K
-from models.lpm.params import ParameterSet
+from models.lpm.interior import BodyPoint, ContactRow, interior_plane, surface_size
+from models.lpm.params import ParameterError, ParameterSet
 from models.notification import Body, Occupant, Seat
 
 __all__ = ["ContactSpec", "Model", "Restraints", "build_model"]
@@ -157,26 +160,6 @@ class Model:
     contact_names: tuple[str, ...]
     belt_names: tuple[str, ...]
     info: dict[str, float] = field(default_factory=dict)
-
-
-#: Which parameter gives each sagittal contact its unloading hysteresis
-#: (share of the elastic force not returned while the contact unloads,
-#: ``kernel.C_HYST``): crushable interior trim, the vented airbag and the seat
-#: foam. The coronal (side) contacts stay elastic with dampers.
-SAGITTAL_HYSTERESIS: dict[str, str] = {
-    "airbag_head": "frontal.airbag.hysteresis",
-    "airbag_chest": "frontal.airbag.hysteresis",
-    "wheel_chest": "frontal.interior_hysteresis",
-    "wheel_head": "frontal.interior_hysteresis",
-    "windshield_head": "frontal.interior_hysteresis",
-    "dash_head": "frontal.interior_hysteresis",
-    "dash_chest": "frontal.interior_hysteresis",
-    "knee_bolster": "frontal.interior_hysteresis",
-    "seat_back_pelvis": "seat.foam_hysteresis",
-    "seat_back_abdomen": "seat.foam_hysteresis",
-    "seat_back_thorax": "seat.foam_hysteresis",
-    "head_restraint": "seat.foam_hysteresis",
-}
 
 
 def _u(a: float) -> np.ndarray:
@@ -419,44 +402,92 @@ def _belt_row(
     ]
 
 
-def _sagittal(ps: ParameterSet, occ: Occupant, rs: Restraints) -> Model:
-    b = occ.body.value
-    pre = f"body.{b}."
-    ll, mb, ch = _body_arrays(ps, b, lateral=False)
-    lean = math.radians(occ.posture_lumbar_flexion_deg - ps["posture.neutral_lumbar_flexion"])
+@dataclass(frozen=True)
+class _Surface:
+    """A surface of the interior for one occupant: segment a-b, its motion and channel."""
+
+    a: tuple[float, float]
+    b: tuple[float, float]
+    motion: tuple[float, float] = (0.0, 0.0)
+    channel: int = 0
+
+
+#: How a surface is drawn for a contact's body point (most ignore the point).
+_SurfaceFn = Callable[[BodyPoint], _Surface]
+
+
+def _fixed(surface: _Surface) -> _SurfaceFn:
+    """A surface that does not depend on the contact's body point."""
+
+    def draw(_pt: BodyPoint) -> _Surface:
+        return surface
+
+    return draw
+
+
+def _contacts(
+    rows: Sequence[ContactRow],
+    points: Mapping[str, BodyPoint],
+    surfaces: Mapping[str, _SurfaceFn],
+    motions: Mapping[str, tuple[float, float]],
+) -> list[ContactSpec]:
+    """The kernel's contacts from the interior table's rows, in table order."""
+    out = []
+    for row in rows:
+        pt = points[row.point]
+        try:
+            surface = surfaces[row.surface](pt)
+        except KeyError:
+            raise ParameterError(f"interior contact {row.name}: unknown surface") from None
+        law: dict[str, Any] = dict(row.law)
+        if "law" in law:
+            law["law"] = int(law["law"])
+        out.append(
+            ContactSpec(
+                row.name,
+                pt.k,
+                pt.p,
+                pt.r,
+                pt.radius,
+                surface.a,
+                surface.b,
+                motions[row.motion] if row.motion is not None else surface.motion,
+                channel=row.channel if row.channel is not None else surface.channel,
+                enabled=row.enabled,
+                hysteresis=row.hysteresis,
+                **law,
+            )
+        )
+    return out
+
+
+def _posture_angles(ps: ParameterSet, lean_rad: float) -> np.ndarray:
+    """Sagittal generalised coordinates of the seated posture leaning by `lean_rad`."""
+    a1 = -math.radians(ps["posture.torso_recline"]) + lean_rad
+    a2 = a1 + math.radians(ps["posture.thorax_relative"])
+    a3 = math.radians(ps["posture.neck_angle"]) + 0.5 * lean_rad
+    a4 = math.radians(ps["posture.head_angle"])
+    return np.array([0.0, a1, a2, a3, a4, 0.0])
+
+
+def _frontal_surfaces(
+    ps: ParameterSet, occ: Occupant, ll: FloatArray, qn: np.ndarray, head: BodyPoint
+) -> tuple[dict[str, _SurfaceFn], float]:
+    """The frontal interior (vehicle fixed: shifted by -track) and the seat (seat fixed).
+
+    Returns the surfaces and the depth of the frontal airbag, m. The front
+    passenger has no wheel, a larger bag deploying from the instrument panel top
+    and his own panel and knee-bolster geometry (``frontal.passenger.*``).
+    """
+    pre = f"body.{occ.body.value}."
     track = occ.seat_track_mm / 1000.0
-
-    def posture(lean_rad: float) -> np.ndarray:
-        a1 = -math.radians(ps["posture.torso_recline"]) + lean_rad
-        a2 = a1 + math.radians(ps["posture.thorax_relative"])
-        a3 = math.radians(ps["posture.neck_angle"]) + 0.5 * lean_rad
-        a4 = math.radians(ps["posture.head_angle"])
-        return np.array([0.0, a1, a2, a3, a4, 0.0])
-
-    q0 = posture(lean)
-    qn = posture(0.0)
-    jt = _joint_table(ps, b, False, q0, qn)
-    mass = float(mb[:, 3].sum())
-    se = np.array([ps["seat.friction"], mass * ps["seat.gravity"], ps["seat.slip_speed"], 0.0])
-
-    head = (4, ps[pre + "cg.head_up"], ps[pre + "cg.head_forward"])
-    h_s, r_s = ps[pre + "sternum_height"], ps[pre + "sternum_offset"]
-    head_r = ps[pre + "head_radius"]
-    kbot = ps["seat.bottoming_stiffness"]
-    ramp = ps["frontal.contact_damping_ramp"]
-
-    # steering wheel and airbag (vehicle fixed: shift by -track); the front
-    # passenger has no wheel, a larger bag deploying from the instrument panel
-    # top, and his own panel and knee-bolster geometry (frontal.passenger.*)
-    passenger = occ.seat is Seat.FRONT_PASSENGER
-    has_wheel = not passenger
     hub = np.array([ps["frontal.wheel.hub_x"] - track, ps["frontal.wheel.hub_z"]])
     ang = math.radians(ps["frontal.wheel.angle"])
     t_dir = np.array([-math.sin(ang), math.cos(ang)])
     n_dir = np.array([-math.cos(ang), -math.sin(ang)])
     wa, wb = _seg(hub, t_dir, ps["frontal.wheel.radius"])
     bag_depth = ps["frontal.airbag.depth"]
-    if passenger:
+    if occ.seat is Seat.FRONT_PASSENGER:
         module = np.array(
             [
                 ps["frontal.passenger.airbag.module_x"] - track,
@@ -485,228 +516,57 @@ def _sagittal(ps: ParameterSet, occ: Occupant, rs: Restraints) -> Model:
         dash_b,
     )
     ws_b = (ps["frontal.windshield.x1"] - track, ps["frontal.windshield.z1"])
-    contacts: list[ContactSpec] = [
-        ContactSpec(
-            "airbag_head",
-            *head,
-            head_r,
-            ba,
-            bb,
-            bag_motion,
-            channel=2,
-            law=1,
-            stiff=ps["frontal.airbag.stiffness"],
-            stiff3=ps["frontal.airbag.squeeze_start"],
-            damp=ps["frontal.airbag.damping"],
-            fcap=ps["frontal.airbag.head_force"],
-            ramp=ps["frontal.airbag.ramp"],
-            enabled=rs.airbag,
-        ),
-        ContactSpec(
-            "airbag_chest",
-            6,
-            h_s,
-            r_s,
-            0.02,
-            ba,
-            bb,
-            bag_motion,
-            channel=2,
-            law=1,
-            stiff=ps["frontal.airbag.stiffness"],
-            stiff3=ps["frontal.airbag.squeeze_start"],
-            damp=ps["frontal.airbag.damping"],
-            fcap=ps["frontal.airbag.chest_force"],
-            ramp=ps["frontal.airbag.ramp"],
-            enabled=rs.airbag,
-            share=ps["frontal.airbag.chest_sternum_share"],
-        ),
-        ContactSpec(
-            "wheel_chest",
-            5,
-            h_s,
-            r_s,
-            0.02,
-            wa,
-            wb,
-            stiff=ps["frontal.wheel.chest_stiffness"],
-            damp=ps["frontal.wheel.damping"],
-            fcap=ps["frontal.wheel.collapse_force"],
-            give=ps["frontal.wheel.stroke"],
-            k_bottom=kbot,
-            ramp=ramp,
-            enabled=has_wheel,
-            bottom_cap=ps["frontal.wheel.bottom_cap"],
-            crush_viscosity=ps["numerics.crush_viscosity"],
-            crush_limit=ps["frontal.wheel.crush_stroke"],
-        ),
-        ContactSpec(
-            "wheel_head",
-            *head,
-            head_r,
-            wa,
-            wb,
-            stiff=ps["frontal.wheel.head_stiffness"],
-            damp=ps["frontal.wheel.damping"],
-            fcap=ps["frontal.wheel.collapse_force"],
-            give=ps["frontal.wheel.stroke"],
-            k_bottom=kbot,
-            ramp=ramp,
-            enabled=has_wheel,
-            bottom_cap=ps["frontal.wheel.bottom_cap"],
-            crush_viscosity=ps["numerics.crush_viscosity"],
-            crush_limit=ps["frontal.wheel.crush_stroke"],
-        ),
-        ContactSpec(
-            "windshield_head",
-            *head,
-            head_r,
-            ws_a,
-            ws_b,
-            stiff=ps["frontal.windshield.stiffness"],
-            damp=ps["frontal.wheel.damping"],
-            fcap=ps["frontal.windshield.cap"],
-            give=ps["frontal.windshield.give"],
-            k_bottom=kbot,
-            ramp=ramp,
-        ),
-        ContactSpec(
-            "dash_head",
-            *head,
-            head_r,
-            dash_a,
-            dash_b,
-            stiff=ps["frontal.dash.stiffness"],
-            damp=ps["frontal.wheel.damping"],
-            fcap=ps["frontal.dash.cap"],
-            give=ps["frontal.dash.give"],
-            k_bottom=kbot,
-            ramp=ramp,
-            bottom_cap=ps["frontal.dash.bottom_cap"],
-            crush_viscosity=ps["numerics.crush_viscosity"],
-            crush_limit=ps["frontal.dash.crush_stroke"],
-        ),
-        ContactSpec(
-            "dash_chest",
-            5,
-            h_s,
-            r_s,
-            0.02,
-            dash_a,
-            dash_b,
-            stiff=ps["frontal.dash.stiffness"],
-            damp=ps["frontal.wheel.damping"],
-            fcap=ps["frontal.dash.cap"],
-            give=ps["frontal.dash.give"],
-            k_bottom=kbot,
-            ramp=ramp,
-            bottom_cap=ps["frontal.dash.bottom_cap"],
-            crush_viscosity=ps["numerics.crush_viscosity"],
-            crush_limit=ps["frontal.dash.crush_stroke"],
-        ),
-    ]
-    # knee bolster: the knee moves with the pelvis; the bolster is placed for the
-    # 50M at mid track with the stated gap, so other bodies get their own gap.
-    knee = (0, ps[pre + "thigh_length"], ps[pre + "knee_height"])
-    knee_r = ps[pre + "knee_radius"]
+    # knee bolster: placed for the 50M at mid track with the stated gap, so
+    # other bodies get their own gap
     x_bolster = (
         ps["body.male_50th.thigh_length"] + ps["body.male_50th.knee_radius"] + knee_gap - track
     )
     kz = ps["body.male_50th.knee_height"]
-    contacts.append(
-        ContactSpec(
-            "knee_bolster",
-            *knee,
-            knee_r,
-            (x_bolster, kz - 0.25),
-            (x_bolster, kz + 0.25),
-            stiff=ps["frontal.knee.stiffness"],
-            damp=ps["frontal.knee.damping"],
-            fcap=ps["frontal.knee.cap"],
-            give=ps["frontal.knee.give"],
-            k_bottom=kbot,
-            ramp=ramp,
-            bottom_cap=ps["frontal.knee.bottom_cap"],
-            crush_viscosity=ps["numerics.crush_viscosity"],
-            crush_limit=ps["frontal.knee.crush_stroke"],
-        )
-    )
+    kh = float(surface_size(ps, "knee_bolster_half_height"))
     # the thighs: a surface carried by the pelvis (kernel channel 4), from
-    # thigh_surface_start of the thigh length forward of the H-point to the top of the
-    # knee, for the head and chest of an occupant folding over the lap belt
+    # thigh_surface_start of the thigh length forward of the H-point to the top
+    # of the knee, for the head and chest of an occupant folding over the lap belt
     tl = ps[pre + "thigh_length"]
     thigh_a = (ps[pre + "thigh_surface_start"] * tl, ps[pre + "thigh_top"])
-    thigh_b = (tl, ps[pre + "knee_height"] + knee_r)
-    for name, k_body, p_body, r_body, rad in (
-        ("thigh_head", *head, head_r),
-        ("thigh_chest", 5, h_s, r_s, 0.02),
-    ):
-        contacts.append(
-            ContactSpec(
-                name,
-                k_body,
-                p_body,
-                r_body,
-                rad,
-                thigh_a,
-                thigh_b,
-                motion=(1.0, 0.0),
-                channel=4,
-                stiff=ps["frontal.thigh.stiffness"],
-                damp=ps["frontal.thigh.damping"],
-                give=ps["frontal.thigh.give"],
-                k_bottom=kbot,
-                ramp=ramp,
-            )
-        )
+    thigh_b = (tl, ps[pre + "knee_height"] + ps[pre + "knee_radius"])
     # seat back and head restraint (seat fixed): touching in the neutral posture
     sb = -math.radians(ps["seat.back_angle"])
     n_sb = _w(sb)
     u_sb = _u(sb)
-    back = ps[pre + "back_offset"]
-    sb_k, sb_c, sb_g = ps["seat.back_stiffness"], ps["seat.back_damping"], ps["seat.back_give"]
-    for name, k, p, r, rad in (
-        ("seat_back_pelvis", 0, 0.0, 0.08, 0.12),
-        ("seat_back_abdomen", 1, ps[pre + "cg.abdomen"], 0.0, back),
-        ("seat_back_thorax", 2, ps[pre + "cg.thorax"], 0.0, back),
-    ):
-        centre = _point(qn, ll, k, p, r) - (rad + _CLEAR) * n_sb
-        a, bpt = _seg(centre, u_sb, 0.15)
-        contacts.append(
-            ContactSpec(
-                name,
-                k,
-                p,
-                r,
-                rad,
-                a,
-                bpt,
-                stiff=sb_k,
-                damp=sb_c,
-                give=sb_g,
-                k_bottom=kbot,
-                ramp=ramp,
-            )
-        )
-    head_pos = _point(qn, ll, *head)
-    centre = head_pos - (head_r + ps["seat.head_restraint_backset"] + _CLEAR) * n_sb
-    a, bpt = _seg(centre, u_sb, 0.12)
-    contacts.append(
-        ContactSpec(
-            "head_restraint",
-            *head,
-            head_r,
-            a,
-            bpt,
-            stiff=ps["seat.head_restraint_stiffness"],
-            damp=ps["seat.head_restraint_damping"],
-            give=ps["seat.head_restraint_give"],
-            k_bottom=kbot,
-            ramp=ramp,
-        )
-    )
+    back_half = float(surface_size(ps, "seat_back_half_length"))
+    hr_half = float(surface_size(ps, "head_restraint_half_length"))
 
-    # belts
+    def seat_back(pt: BodyPoint) -> _Surface:
+        centre = _point(qn, ll, pt.k, pt.p, pt.r) - (pt.radius + _CLEAR) * n_sb
+        return _Surface(*_seg(centre, u_sb, back_half))
+
+    def head_restraint(pt: BodyPoint) -> _Surface:
+        head_pos = _point(qn, ll, pt.k, pt.p, pt.r)
+        centre = head_pos - (pt.radius + ps["seat.head_restraint_backset"] + _CLEAR) * n_sb
+        return _Surface(*_seg(centre, u_sb, hr_half))
+
+    del head  # the head restraint is drawn from the contact's own point
+    fixed = {
+        "frontal_airbag": _Surface(ba, bb, bag_motion, 2),
+        "steering_wheel": _Surface(wa, wb),
+        "windshield": _Surface(ws_a, ws_b),
+        "instrument_panel": _Surface(dash_a, dash_b),
+        "knee_bolster": _Surface((x_bolster, kz - kh), (x_bolster, kz + kh)),
+        "thighs": _Surface(thigh_a, thigh_b, (1.0, 0.0), 4),
+    }
+    surfaces: dict[str, _SurfaceFn] = {name: _fixed(s) for name, s in fixed.items()}
+    surfaces["seat_back"] = seat_back
+    surfaces["head_restraint"] = head_restraint
+    return surfaces, bag_depth
+
+
+def _frontal_belts(
+    ps: ParameterSet, occ: Occupant, rs: Restraints, q0: np.ndarray, ll: FloatArray
+) -> list[list[float]]:
+    """Shoulder and lap belt rows (retractor load limiter, pretensioner)."""
+    b = occ.body.value
+    h_s, r_s = ps[f"body.{b}.sternum_height"], ps[f"body.{b}.sternum_offset"]
+    track = occ.seat_track_mm / 1000.0
     pt = None
     if rs.pretensioner_fire_s is not None:
         t0 = rs.pretensioner_fire_s
@@ -724,7 +584,7 @@ def _sagittal(ps: ParameterSet, occ: Occupant, rs: Restraints) -> Model:
     buckle = (ps["frontal.belt.buckle_x"], ps["frontal.belt.buckle_z"])
     lap_a = (ps["frontal.belt.lap_anchor_x"], ps["frontal.belt.lap_anchor_z"])
     c_ll = ps["frontal.belt.limiter_viscosity"]
-    belts = [
+    return [
         _belt_row(
             6,
             h_s,
@@ -758,6 +618,12 @@ def _sagittal(ps: ParameterSet, occ: Occupant, rs: Restraints) -> Model:
             rs.belted,
         ),
     ]
+
+
+def _frontal_bag_schedule(
+    ps: ParameterSet, rs: Restraints, bag_depth: float
+) -> tuple[FloatArray, float]:
+    """The frontal airbag's timing row (kernel bag layout) and its full-inflation time, s."""
     t_start = rs.airbag_fire_s + ps["frontal.airbag.delay"]
     t_full = t_start + ps["frontal.airbag.fill_time"]
     bag = np.array(
@@ -772,12 +638,29 @@ def _sagittal(ps: ParameterSet, occ: Occupant, rs: Restraints) -> Model:
             ps["frontal.airbag.deployment_stiffness"],
         ]
     )
-    contacts = [
-        replace(c, hysteresis=ps[SAGITTAL_HYSTERESIS[c.name]])
-        if c.name in SAGITTAL_HYSTERESIS
-        else c
-        for c in contacts
+    return bag, t_full
+
+
+def _sagittal(ps: ParameterSet, occ: Occupant, rs: Restraints) -> Model:
+    """The frontal and rear model: the sagittal plane, the interior of the parameter set."""
+    b = occ.body.value
+    ll, mb, ch = _body_arrays(ps, b, lateral=False)
+    lean = math.radians(occ.posture_lumbar_flexion_deg - ps["posture.neutral_lumbar_flexion"])
+    q0 = _posture_angles(ps, lean)
+    qn = _posture_angles(ps, 0.0)
+    jt = _joint_table(ps, b, False, q0, qn)
+    mass = float(mb[:, 3].sum())
+    se = np.array([ps["seat.friction"], mass * ps["seat.gravity"], ps["seat.slip_speed"], 0.0])
+    conditions = [
+        c
+        for c, on in (("airbag", rs.airbag), ("driver", occ.seat is not Seat.FRONT_PASSENGER))
+        if on
     ]
+    points, rows = interior_plane(ps, "sagittal", b, lambda k: float(ll[k]), conditions)
+    surfaces, bag_depth = _frontal_surfaces(ps, occ, ll, qn, points["head"])
+    contacts = _contacts(rows, points, surfaces, {})
+    belts = _frontal_belts(ps, occ, rs, q0, ll)
+    bag, t_full = _frontal_bag_schedule(ps, rs, bag_depth)
     return _finish(
         "sagittal",
         ll,
@@ -801,9 +684,72 @@ def _sagittal(ps: ParameterSet, occ: Occupant, rs: Restraints) -> Model:
     )
 
 
+def _side_surfaces(
+    ps: ParameterSet, q0: np.ndarray, ll: FloatArray, head: BodyPoint, far: bool
+) -> tuple[dict[str, _SurfaceFn], dict[str, tuple[float, float]]]:
+    """The side interior: door and window (near side), console, seat and far door (far side).
+
+    Returns the surfaces and the named motions of the intruding ones.
+    """
+    up = ps["side.upper_intrusion_ratio"]
+    # a head whose CG sits below the top of the striking barrier face is hit
+    # by the barrier through the window with the full door intrusion (the
+    # IIHS barrier represents a pickup/SUV front at a small occupant's head
+    # height); a taller occupant's head sees the smaller upper intrusion
+    head_z = float(_point(q0, ll, head.k, head.p, head.r)[1])
+    up_head = 1.0 if head_z < ps["side.barrier_top_z"] else up
+    motions = {
+        "intrusion": (-1.0, 0.0),
+        "upper_intrusion": (-up, 0.0),
+        "head_intrusion": (-up_head, 0.0),
+    }
+    if not far:
+        dx, zl, zh = ps["side.door_x"], ps["side.door_z_low"], ps["side.door_z_high"]
+        wx, wz = ps["side.window_x"], ps["side.window_z_high"]
+        fixed = {
+            "door": _Surface((dx, zl), (dx, zh)),
+            "window": _Surface((wx, zh), (ps["side.window_top_x"], wz)),  # tumblehome
+        }
+    else:
+        cx, cz = ps["side.far.console_x"], ps["side.far.console_z_high"]
+        sx, fx = ps["side.far.seat_x"], ps["side.far.door_x"]
+        seat_z = surface_size(ps, "far_seat_z")
+        fixed = {
+            "console": _Surface((cx, float(surface_size(ps, "console_z_low"))), (cx, cz)),
+            "far_seat": _Surface((sx, float(seat_z[0])), (sx, float(seat_z[1]))),
+            "far_door": _Surface(
+                (fx, float(surface_size(ps, "far_door_z_low"))), (fx, ps["side.window_z_high"])
+            ),
+        }
+    return {name: _fixed(s) for name, s in fixed.items()}, motions
+
+
+def _far_side_belt(ps: ParameterSet, rs: Restraints, q0: np.ndarray, ll: FloatArray) -> list[float]:
+    """The far-side shoulder belt (the lap belt does not act in the coronal plane)."""
+    load_limit = ps[
+        "frontal.belt.load_limit_airbag" if rs.airbag_equipped else "frontal.belt.load_limit"
+    ]
+    return _belt_row(
+        2,
+        0.9 * ll[2],
+        0.0,
+        (ps["side.far.dring_x"], ps["side.far.dring_z"]),
+        None,
+        ps["side.far.shoulder_belt_stiffness"],
+        ps["frontal.belt.shoulder_damping"],
+        ps["frontal.belt.shoulder_slack"],
+        load_limit,
+        ps["frontal.belt.limiter_viscosity"],
+        None,
+        q0,
+        ll,
+        rs.belted,
+    )
+
+
 def _coronal(ps: ParameterSet, occ: Occupant, rs: Restraints, far: bool) -> Model:
+    """The near- and far-side models: the coronal plane, the interior of the parameter set."""
     b = occ.body.value
-    pre = f"body.{b}."
     ll, mb, ch = _body_arrays(ps, b, lateral=True)
     # forward lean shortens the chain as seen in the coronal plane
     lean = math.radians(occ.posture_lumbar_flexion_deg - ps["posture.neutral_lumbar_flexion"])
@@ -814,278 +760,16 @@ def _coronal(ps: ParameterSet, occ: Occupant, rs: Restraints, far: bool) -> Mode
     mass = float(mb[:, 3].sum())
     slip = ps["side.slip_damping"] * (ps["side.belt_slip_factor"] if rs.belted else 1.0)
     se = np.array([ps["seat.friction"], mass * ps["seat.gravity"], ps["seat.slip_speed"], slip])
-    kbot = ps["seat.bottoming_stiffness"]
-    damp = ps["side.damping"]
-    ramp = ps["frontal.contact_damping_ramp"]
-    head = (4, ps[pre + "cg.head_up"], 0.0)
-    h_s, r_rib = ps[pre + "sternum_height"], ps[pre + "chest_half_width"]
-    hip_r = ps[pre + "hip_half_width"]
-    sh_r = ps[pre + "shoulder_half_width"]
-    abd = (1, 0.6 * ll[1], 0.0)
-    shoulder = (2, 0.9 * ll[2], 0.0)
-    head_r = ps[pre + "head_half_width"]
-    contacts: list[ContactSpec] = []
-    belts: list[list[float]] = []
-    belt_names: tuple[str, ...] = ()
-    if not far:
-        dx, zl, zh = ps["side.door_x"], ps["side.door_z_low"], ps["side.door_z_high"]
-        wx, wz = ps["side.window_x"], ps["side.window_z_high"]
-        up = ps["side.upper_intrusion_ratio"]
-        # a head whose CG sits below the top of the striking barrier face is hit
-        # by the barrier through the window with the full door intrusion (the
-        # IIHS barrier represents a pickup/SUV front at a small occupant's head
-        # height); a taller occupant's head sees the smaller upper intrusion
-        head_z = float(_point(q0, ll, *head)[1])
-        up_head = 1.0 if head_z < ps["side.barrier_top_z"] else up
-        door = ((dx, zl), (dx, zh))
-        window = ((wx, zh), (ps["side.window_top_x"], wz))  # tumblehome
-        contacts += [
-            ContactSpec(
-                "door_pelvis",
-                0,
-                0.0,
-                0.0,
-                hip_r,
-                *door,
-                (-1.0, 0.0),
-                channel=1,
-                stiff=ps["side.pelvis_stiffness"],
-                damp=damp,
-                fcap=ps["side.pelvis_cap"],
-                give=ps["side.pelvis_give"],
-                k_bottom=kbot,
-                ramp=ramp,
-            ),
-            ContactSpec(
-                "door_abdomen",
-                *abd,
-                0.85 * hip_r,
-                *door,
-                (-1.0, 0.0),
-                channel=1,
-                stiff=ps["side.abdomen_stiffness"],
-                damp=damp,
-                fcap=ps["side.abdomen_cap"],
-                give=ps["side.abdomen_give"],
-                k_bottom=kbot,
-                ramp=ramp,
-            ),
-            ContactSpec(
-                "door_rib",
-                5,
-                h_s,
-                r_rib,
-                0.01,
-                *door,
-                (-1.0, 0.0),
-                channel=1,
-                stiff=ps["side.rib_stiffness"],
-                damp=damp,
-                fcap=ps["side.rib_cap"],
-                give=ps["side.rib_give"],
-                k_bottom=kbot,
-                ramp=ramp,
-            ),
-            ContactSpec(
-                "window_shoulder",
-                *shoulder,
-                sh_r,
-                *window,
-                (-up, 0.0),
-                channel=1,
-                stiff=ps["side.shoulder_stiffness"],
-                damp=damp,
-                fcap=ps["side.shoulder_cap"],
-                give=ps["side.shoulder_give"],
-                k_bottom=kbot,
-                ramp=ramp,
-            ),
-            ContactSpec(
-                "window_head",
-                *head,
-                head_r,
-                *window,
-                (-up_head, 0.0),
-                channel=1,
-                stiff=ps["side.head_stiffness"],
-                damp=damp,
-                give=ps["side.head_give"],
-                k_bottom=kbot,
-                ramp=ramp,
-            ),
-        ]
-        # side (thorax) and curtain airbags: constant-force bags that deploy
-        # from the door and the roof rail toward the occupant and ride on the
-        # intrusion (kernel channel 3). The bag stays between the occupant and
-        # the door or window, which load the occupant through it: the direct
-        # rib-door and head-window contacts are off, and the bag's pressure rise
-        # beyond its squeeze depth stands for them until the bag and the trim
-        # behind it (the door contact's give) are used up, then the bottoming
-        # spring of every contact; the thorax bag spreads its load (its point
-        # follows only part of the rib deflection).
-        depth = ps["side.airbag.depth"]
-        bag_common = {
-            "channel": 3,
-            "law": 1,
-            "stiff": ps["side.airbag.stiffness"],
-            "stiff3": ps["side.airbag.squeeze_start"],
-            "damp": ps["side.airbag.damping"],
-            "ramp": ps["side.airbag.ramp"],
-            "enabled": rs.side_airbag,
-            "hysteresis": ps["side.airbag.hysteresis"],
-            "k_bottom": kbot,
-        }
-        contacts = [
-            replace(c, enabled=False)
-            if rs.side_airbag and c.name in ("door_rib", "window_head")
-            else c
-            for c in contacts
-        ]
-        contacts += [
-            _gap_filling_bag(
-                ContactSpec(
-                    "side_airbag_thorax",
-                    6,
-                    h_s,
-                    r_rib,
-                    0.01,
-                    *door,
-                    (-1.0, 0.0),
-                    fcap=ps["side.airbag.thorax_force"],
-                    share=ps["side.airbag.rib_share"],
-                    give=depth + ps["side.rib_give"],
-                    **bag_common,  # type: ignore[arg-type]
-                ),
-                q0,
-                ll,
-                depth,
-            ),
-            _gap_filling_bag(
-                ContactSpec(
-                    "curtain_airbag_head",
-                    *head,
-                    head_r,
-                    *window,
-                    (-up_head, 0.0),
-                    fcap=ps["side.airbag.curtain_force"],
-                    give=depth + ps["side.head_give"],
-                    **bag_common,  # type: ignore[arg-type]
-                ),
-                q0,
-                ll,
-                depth,
-            ),
-        ]
-    else:
-        cx, cz = ps["side.far.console_x"], ps["side.far.console_z_high"]
-        sx, fx = ps["side.far.seat_x"], ps["side.far.door_x"]
-        kf, capf, gf = ps["side.far.stiffness"], ps["side.far.cap"], ps["side.far.give"]
-        console = ((cx, -0.15), (cx, cz))
-        seat = ((sx, 0.15), (sx, 0.75))
-        fdoor = ((fx, 0.2), (fx, ps["side.window_z_high"]))
-        contacts += [
-            ContactSpec(
-                "console_pelvis",
-                0,
-                0.0,
-                0.0,
-                hip_r,
-                *console,
-                stiff=kf,
-                damp=damp,
-                fcap=capf,
-                give=gf,
-                k_bottom=kbot,
-                ramp=ramp,
-            ),
-            ContactSpec(
-                "console_abdomen",
-                *abd,
-                0.85 * hip_r,
-                *console,
-                stiff=kf,
-                damp=damp,
-                fcap=capf,
-                give=gf,
-                k_bottom=kbot,
-                ramp=ramp,
-            ),
-            ContactSpec(
-                "seat_rib",
-                5,
-                h_s,
-                r_rib,
-                0.01,
-                *seat,
-                stiff=kf,
-                damp=damp,
-                fcap=capf,
-                give=gf,
-                k_bottom=kbot,
-                ramp=ramp,
-            ),
-            ContactSpec(
-                "seat_shoulder",
-                *shoulder,
-                sh_r,
-                *seat,
-                stiff=kf,
-                damp=damp,
-                fcap=capf,
-                give=gf,
-                k_bottom=kbot,
-                ramp=ramp,
-            ),
-            ContactSpec(
-                "far_door_shoulder",
-                *shoulder,
-                sh_r,
-                *fdoor,
-                (-1.0, 0.0),
-                channel=1,
-                stiff=ps["side.shoulder_stiffness"],
-                damp=damp,
-                fcap=ps["side.shoulder_cap"],
-                give=ps["side.shoulder_give"],
-                k_bottom=kbot,
-                ramp=ramp,
-            ),
-            ContactSpec(
-                "far_door_head",
-                *head,
-                head_r,
-                *fdoor,
-                (-1.0, 0.0),
-                channel=1,
-                stiff=ps["side.head_stiffness"],
-                damp=damp,
-                give=ps["side.head_give"],
-                k_bottom=kbot,
-                ramp=ramp,
-            ),
-        ]
-        load_limit = ps[
-            "frontal.belt.load_limit_airbag" if rs.airbag_equipped else "frontal.belt.load_limit"
-        ]
-        belts.append(
-            _belt_row(
-                2,
-                0.9 * ll[2],
-                0.0,
-                (ps["side.far.dring_x"], ps["side.far.dring_z"]),
-                None,
-                ps["side.far.shoulder_belt_stiffness"],
-                ps["frontal.belt.shoulder_damping"],
-                ps["frontal.belt.shoulder_slack"],
-                load_limit,
-                ps["frontal.belt.limiter_viscosity"],
-                None,
-                q0,
-                ll,
-                rs.belted,
-            )
-        )
-        belt_names = ("shoulder",)
+    plane = "far_side" if far else "near_side"
+    conditions = ["side_airbag"] if rs.side_airbag else ["no_side_airbag"]
+    points, rows = interior_plane(ps, plane, b, lambda k: float(ll[k]), conditions)
+    surfaces, motions = _side_surfaces(ps, q0, ll, points["head"], far)
+    contacts = [
+        _gap_filling_bag(c, q0, ll, ps["side.airbag.depth"]) if row.fills_gap else c
+        for c, row in zip(_contacts(rows, points, surfaces, motions), rows, strict=True)
+    ]
+    belts = [_far_side_belt(ps, rs, q0, ll)] if far else []
+    belt_names: tuple[str, ...] = ("shoulder",) if far else ()
     info: dict[str, float] = {}
     if rs.side_airbag and not far:
         # the coronal model has no frontal airbag: its bag timing row serves the

@@ -83,6 +83,9 @@ class ParameterSet:
     description: str
     sha256: str
     entries: Mapping[str, ParameterEntry] = field(repr=False)
+    #: the vehicle interior: per model plane its body points and contacts
+    #: (:mod:`models.lpm.interior`), as read from the file's ``interior`` object
+    interior: Mapping[str, Any] = field(default_factory=dict, repr=False, compare=False, hash=False)
 
     def __getitem__(self, key: str) -> float:
         """Value of ``key`` in its unit."""
@@ -108,7 +111,9 @@ class ParameterSet:
         file leaves it unchanged, and changing any value changes it.
         """
         values = {k: e.value for k, e in sorted(self.entries.items())}
-        text = json.dumps(values, sort_keys=True, separators=(",", ":"), allow_nan=False)
+        # the interior table is physics too: which point meets which surface, by which law
+        doc = {"values": values, "interior": dict(self.interior)}
+        text = json.dumps(doc, sort_keys=True, separators=(",", ":"), allow_nan=False)
         return hashlib.sha256(text.encode()).hexdigest()
 
     def to_document(self) -> dict[str, Any]:
@@ -121,7 +126,14 @@ class ParameterSet:
             if e.maximum is not None:
                 d["max"] = e.maximum
             params[key] = d
-        return {"name": self.name, "description": self.description, "parameters": params}
+        doc: dict[str, Any] = {
+            "name": self.name,
+            "description": self.description,
+            "parameters": params,
+        }
+        if self.interior:
+            doc["interior"] = json.loads(json.dumps(dict(self.interior)))
+        return doc
 
     def with_values(
         self, values: Mapping[str, float], *, name: str | None = None, note: str = "calibrated"
@@ -209,11 +221,15 @@ def parse_parameter_set(raw: bytes, *, expected_keys: set[str] | None = None) ->
             raise ParameterError(f"parameter set {name!r} lacks {missing[:5]} ...")
         if extra:
             raise ParameterError(f"parameter set {name!r} has unknown keys {extra[:5]} ...")
+    interior = doc.get("interior", {})
+    if not isinstance(interior, dict):
+        raise ParameterError("'interior' must be an object")
     return ParameterSet(
         name=name,
         description=str(doc.get("description", "")),
         sha256=hashlib.sha256(raw).hexdigest(),
         entries=MappingProxyType(entries),
+        interior=MappingProxyType(interior),
     )
 
 
