@@ -112,6 +112,7 @@ def caller_for_key_id(sessions: sessionmaker[Session], key_id: int) -> Caller | 
         row = repository.get_active_key_by_id(session, key_id)
     return None if row is None else Caller(key_id=row.id, name=row.name, role=Role(row.role))
 
+
 def _new_secret() -> tuple[str, str, str]:
     secret = KEY_PREFIX + secrets.token_urlsafe(KEY_BYTES)
     return secret, secret[: len(KEY_PREFIX) + 6], hash_key(secret)

@@ -147,6 +147,7 @@ class EngineFailure(DomainError):
         super().__init__(detail)
         self.reference = reference
 
+
 class MalformedBody(DomainError):
     status, slug, title = 400, "malformed-json", "Malformed JSON"
 

@@ -17,7 +17,6 @@ __all__ = [
     "add_case",
     "find_active_key",
     "get_active_key_by_id",
-
     "get_api_key",
     "get_api_key_by_name",
     "get_case",
