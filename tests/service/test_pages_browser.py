@@ -27,6 +27,7 @@ from typing import Any
 import httpx2 as httpx
 import pytest
 
+from tests.paths import ROOT as REPO
 from tests.service.pages_support import (
     acceleration,
     head_injury,
@@ -49,7 +50,7 @@ CHROMIUM_ARGS = [
     "--disable-component-update",
     "--disable-sync",
 ]
-REPO = Path(__file__).resolve().parents[2]
+
 #: The AIS 0 fill of report.css (a region not at risk).
 AIS0_FILL = "rgb(236, 239, 241)"
 

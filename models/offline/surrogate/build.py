@@ -26,7 +26,9 @@ member order and timestamps in the files), parallel over processes, resumable
 ``--family NAME`` rebuilds one family (``aacn-triage build-surrogates``,
 :mod:`.command`). chaospy is not needed (the Stieltjes
 recurrence and LAR are a few lines of numpy); it is used only by the tests to
-cross-check the basis.
+cross-check the basis (where chaospy would fit, measured: ``benchmarks/bench_chaospy.py``,
+``benchmarks/RESULTS.md``: the empirical-measure recurrence has no chaospy routine, its
+Latin hypercube uses the global random state).
 """
 
 from __future__ import annotations

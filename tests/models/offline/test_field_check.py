@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-from pathlib import Path
-
 import numpy as np
 import pytest
 
@@ -23,6 +21,7 @@ from models.offline.field_check import (
     run_field_check,
 )
 from models.triage import EngineModels, load_engine_models, triage
+from tests.paths import ROOT
 from tests.tolerance import assert_printed_numbers_close
 
 
@@ -34,9 +33,6 @@ def models() -> EngineModels:
 @pytest.fixture(scope="module")
 def check(models: EngineModels) -> FieldCheck:
     return run_field_check(models)
-
-
-ROOT = Path(__file__).resolve().parents[1]
 
 
 def test_cases_are_the_frontal_occupants_with_a_known_outcome() -> None:

@@ -1,4 +1,4 @@
-"""A tiny surrogate library built on the fly against the current LPM code.
+"""A tiny surrogate library, built on the fly against the current LPM code.
 
 Frontal, 50th male, belted with airbag, delta-V 40-60 km/h in one piece (the
 shipped families cover 5-120 km/h in four pieces): 250 LPM runs, 150
@@ -9,11 +9,8 @@ bootstrap replicates with the selection rerun, 100 held-out points; about
 from __future__ import annotations
 
 from dataclasses import replace
-from pathlib import Path
 
-import pytest
-
-from models.offline.surrogate.build import BuildConfig, build_family, write_manifest
+from models.offline.surrogate.build import BuildConfig
 from models.surrogate.spec import FAMILIES, FamilySpec
 
 TINY_NAME = "frontal__male_50th__belted__airbag"
@@ -31,11 +28,3 @@ TINY_CONFIG = BuildConfig(
 def tiny_spec() -> FamilySpec:
     spec = next(s for s in FAMILIES if s.name == TINY_NAME)
     return replace(spec, ranges=(TINY_DELTA_V, *spec.ranges[1:]))
-
-
-@pytest.fixture(scope="session")
-def tiny_library_dir(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    d = tmp_path_factory.mktemp("surrogates")
-    build_family(tiny_spec(), d, TINY_CONFIG)
-    write_manifest(d, TINY_CONFIG)
-    return d

@@ -21,7 +21,7 @@ from models.surrogate.evaluate import (
 )
 from models.surrogate.spec import P_RESOLUTION
 from models.surrogate.store import read_artifact
-from tests.surrogate.conftest import TINY_NAME, tiny_spec
+from tests.models.surrogate.tiny import TINY_NAME, tiny_spec
 
 #: Issue 5 "done when": median relative error of each measure and ISS15+ agreement.
 MAX_MEDIAN_RELATIVE_ERROR = 0.05

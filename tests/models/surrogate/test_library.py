@@ -21,7 +21,7 @@ from models.offline.surrogate.build import (
 from models.offline.surrogate.command import main
 from models.surrogate.evaluate import SurrogateFamily, SurrogateLibrary
 from models.surrogate.store import read_artifact
-from tests.surrogate.conftest import TINY_DELTA_V, TINY_NAME, tiny_spec
+from tests.models.surrogate.tiny import TINY_DELTA_V, TINY_NAME, tiny_spec
 
 NOMINAL = {
     "delta_v_kmh": 50.0,

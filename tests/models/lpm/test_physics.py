@@ -14,7 +14,7 @@ from models.lpm.params import ParameterSet
 from models.lpm.pulses import haversine_pulse, ncap_frontal_pulse, side_pulse
 from models.lpm.simulate import LpmResult, _run_kernel, prepare, simulate
 from models.notification import Body
-from tests.lpm.helpers import bottoming_margin_m, occupant
+from tests.models.lpm.helpers import bottoming_margin_m, occupant
 
 MODES = list(ImpactMode)
 #: Crush allowed past a structure's stroke, m: the step in which the stroke is

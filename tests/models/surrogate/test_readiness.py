@@ -21,8 +21,7 @@ from models.lpm.params import load_parameter_set
 from models.surrogate.evaluate import SurrogateLibrary
 from models.surrogate.golden import golden_mismatch
 from models.surrogate.spec import FAMILIES
-
-ROOT = Path(__file__).resolve().parents[2]
+from tests.paths import ROOT
 
 #: Runs the service on the engine copy in the working directory; prints /readyz.
 _READYZ = """

@@ -16,16 +16,15 @@ import os
 import subprocess
 import sys
 from datetime import UTC, datetime
-from pathlib import Path
 
 import pytest
 
 from models.triage import EngineModels, load_engine_models
 from service.cases_service import evaluate
 from service.schemas import EXAMPLE_NOTIFICATIONS, CrashNotificationIn
+from tests.paths import ROOT
 
 RECEIVED_AT = datetime(2026, 12, 3, 12, 0, tzinfo=UTC)
-ROOT = Path(__file__).resolve().parents[1]
 
 #: Evaluates each notification of stdin (one JSON a line) as the service does and
 #: writes its result JSON (timings excluded) to stdout, one a line.
@@ -35,6 +34,7 @@ from datetime import datetime
 from models.triage import load_engine_models
 from service.cases_service import evaluate
 from service.schemas import CrashNotificationIn
+from tests.paths import ROOT
 
 models = load_engine_models()
 received_at = datetime.fromisoformat(sys.argv[1])

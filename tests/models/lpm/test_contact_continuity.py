@@ -21,7 +21,7 @@ from models.lpm.params import ParameterSet
 from models.lpm.pulses import haversine_pulse
 from models.lpm.simulate import simulate
 from models.notification import AirbagState, Body
-from tests.lpm.helpers import occupant
+from tests.models.lpm.helpers import occupant
 
 #: Largest penetration change in one output step (0.1 ms), m: a surface met
 #: from the front at the highest relative speeds of these cases (unrestrained

@@ -18,8 +18,8 @@ from models.lpm.params import ParameterSet
 from models.lpm.pulses import haversine_pulse, ncap_frontal_pulse, side_pulse
 from models.lpm.simulate import LpmResult, prepare, simulate
 from models.notification import AirbagState, Body, Occupant
-from tests.lpm.helpers import bottoming_margin_m, occupant
-from tests.lpm.test_physics import _penetration_ok
+from tests.models.lpm.helpers import bottoming_margin_m, occupant
+from tests.models.lpm.test_physics import _penetration_ok
 
 #: IIHS side test: a 1500 kg barrier at 50 km/h into an 1100 kg car (car delta-V).
 IIHS_SIDE_DELTA_V_KMH = 50.0 * 1500.0 / 2600.0

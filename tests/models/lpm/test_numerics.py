@@ -17,7 +17,7 @@ from models.lpm.params import ParameterSet
 from models.lpm.pulses import haversine_pulse, ncap_frontal_pulse, side_pulse
 from models.lpm.simulate import _result, _run_kernel, prepare, simulate, simulate_reference
 from models.notification import Body
-from tests.lpm.helpers import occupant
+from tests.models.lpm.helpers import occupant
 
 CASES = [
     (ImpactMode.FRONTAL, ncap_frontal_pulse()),

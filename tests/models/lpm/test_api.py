@@ -10,7 +10,7 @@ from models.lpm.params import ParameterSet
 from models.lpm.pulses import haversine_pulse, ncap_frontal_pulse, side_pulse
 from models.lpm.simulate import STATUS_MESSAGES, LpmResult, simulate, warm_up
 from models.notification import Body
-from tests.lpm.helpers import occupant
+from tests.models.lpm.helpers import occupant
 
 
 def test_result_fields(params: ParameterSet) -> None:

@@ -13,7 +13,7 @@ from models.lpm.pulses import ncap_frontal_pulse, side_pulse
 from models.lpm.simulate import simulate
 from models.notification import Body
 from models.offline.lpm.plot import _nij_terms, plot_simulation
-from tests.lpm.helpers import occupant
+from tests.models.lpm.helpers import occupant
 
 
 @pytest.mark.parametrize(

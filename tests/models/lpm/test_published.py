@@ -49,7 +49,7 @@ from models.lpm.params import ParameterSet
 from models.lpm.pulses import ncap_frontal_pulse, side_pulse
 from models.lpm.simulate import simulate
 from models.notification import Body
-from tests.lpm.helpers import occupant
+from tests.models.lpm.helpers import occupant
 
 #: Published (upper) and floor (lower) bounds per measure, see the module docstring.
 FRONTAL_RANGES = {

@@ -11,7 +11,7 @@ from models.lpm.params import ParameterSet
 from models.lpm.pulses import haversine_pulse, ncap_frontal_pulse, side_pulse
 from models.lpm.simulate import LpmResult, head_clearance_mm, simulate
 from models.notification import Body, Occupant
-from tests.lpm.helpers import occupant
+from tests.models.lpm.helpers import occupant
 
 #: Relative tolerance of the monotonicity checks. Restraint interactions make
 #: some measures flat over part of the grid (the airbag's constant-force

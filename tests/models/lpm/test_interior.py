@@ -13,8 +13,8 @@ from models.lpm.params import ParameterSet
 from models.lpm.pulses import ncap_frontal_pulse
 from models.lpm.simulate import prepare, simulate
 from models.notification import Body, Occupant, Seat
-from tests.lpm.helpers import occupant
-from tests.lpm.test_published import FRONTAL_RANGES
+from tests.models.lpm.helpers import occupant
+from tests.models.lpm.test_published import FRONTAL_RANGES
 
 
 def _passenger(body: Body = Body.MALE_50TH, *, airbag: bool = True) -> Occupant:

@@ -23,8 +23,9 @@ from models.baseline import (
 )
 from models.baseline.logistic import FEATURE_NAMES, MODEL_NAME, MODEL_VERSION, Z_95
 from models.notification import Sex
+from tests.paths import ROOT
 
-MODEL_CARD = Path(__file__).resolve().parents[2] / "docs" / "baseline" / "MODEL_CARD.md"
+MODEL_CARD = ROOT / "docs" / "baseline" / "MODEL_CARD.md"
 
 
 @pytest.fixture(scope="module")

@@ -21,11 +21,12 @@ from models.offline.surrogate.validate import (
 )
 from models.surrogate.evaluate import SurrogateLibrary, default_artifact_dir
 from models.surrogate.spec import FAMILIES, FamilySpec
+from tests.paths import ROOT
 from tests.tolerance import RERUN_RTOL, assert_tree_close
 
 #: A cheap family (rear: about 2 ms an LPM run) for the end-to-end checks.
 CHEAP = "rear__male_50th__belted__airbag_any"
-SHIPPED_JSON = Path(__file__).resolve().parents[2] / "docs" / "surrogate" / "validation.json"
+SHIPPED_JSON = ROOT / "docs" / "surrogate" / "validation.json"
 
 
 @pytest.fixture(scope="module")

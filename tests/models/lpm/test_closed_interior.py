@@ -21,7 +21,7 @@ from models.lpm.params import ParameterSet
 from models.lpm.pulses import haversine_pulse
 from models.lpm.simulate import simulate
 from models.notification import Body
-from tests.lpm.helpers import bottoming_margin_m, occupant
+from tests.models.lpm.helpers import bottoming_margin_m, occupant
 
 RESTRAINTS = ((True, True), (True, False), (False, True), (False, False))
 TRACKS_MM = (-120.0, 0.0, 120.0)
