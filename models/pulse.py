@@ -64,6 +64,7 @@ import numpy as np
 import numpy.typing as npt
 from scipy.optimize import least_squares
 
+from models.arrays import FloatArray
 from models.constants import G_MS2
 from models.injury.filters import cfc_filter
 from models.limits import (
@@ -102,8 +103,6 @@ __all__ = [
     "pdof_from_delta_v",
     "process_pulse",
 ]
-
-FloatArray = npt.NDArray[np.float64]
 
 
 class PulseError(ValueError):

@@ -304,11 +304,14 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app = FastAPI(
         title="aacn-triage",
         version=__version__,
-        summary="Advanced automatic crash notification triage: ISS15+ per occupant, audited.",
+        summary="Advanced automatic crash notification triage per occupant, audited.",
         description=(
-            "POST a crash notification; get, per occupant, the probability of an Injury "
-            "Severity Score of 15 or more with its 95% interval and a transport "
-            "recommendation. Every case is stored for audit. Errors are RFC 9457 "
+            "POST a crash notification; get, per occupant, a trauma-center recommendation "
+            "decided on a field-calibrated probability of MAIS 3+ (an AIS 3+ injury: the "
+            "stand-in for ISS 15+, fitted on real NASS-CDS crashes) with its 95% interval, "
+            "the occupant models' physics that explains it (injury measures, region AIS, "
+            "ISS, their own P(ISS >= 15)), and coded assumptions. Every case is stored for "
+            "audit with the versions and checksums of its models. Errors are RFC 9457 "
             "problem+json. Authenticate with `Authorization: Bearer <key>`."
         ),
         lifespan=lifespan,

@@ -127,7 +127,7 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         },
         "field_model": {
             "version": "1.0.0",
-            "sha256": "1143c9b93b61d59b20a0fa33c1c5cae5ac707ec7903db30daec45189455dd623",
+            "sha256": "f3c4be3270d4972d41713e46d3d7044d91575ecfe2fd66d7159f1e42d367d79a",
         },
         "lpm_parameters:compact_sedan": {
             "version": "compact_sedan",
@@ -135,11 +135,11 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         },
         "lpm_code": {
             "version": "0.2.0",
-            "sha256": "620726f8510f2e6e2f68efec65f34daa1cf2fa5e8cc566a538ef4c74bdbdd3f9",
+            "sha256": "7669bf9c0b91fc4dd58755fabe0f7de941c9210df770ea62e4dedac5517865fb",
         },
         "triage_code": {
             "version": "0.2.0",
-            "sha256": "6309e38c374dc0889be4e0b72a79eb1f40bb95f5fc42ad5cf92c81965892af77",
+            "sha256": "6afaedfe3519185e0888e9a33d6126411518f5be27546a7235ad4346c3fb2752",
         },
         "risk_calibration": {
             "version": "1",
@@ -151,10 +151,10 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         },
         "surrogate_evaluation": {
             "version": "7",
-            "sha256": "b7282b69b38f89dc15c0aebad18abff71b20e4d9063672a610f3b93f3176d21f",
+            "sha256": "b692f5d46ab9b8ea93674806f953f13f3a4d36228cd2a0e27eedafa4b9b7ceb4",
         },
     },
-    "timings_ms": {"pulse": 0.09, "occupants": 38.09, "field_model": 0.08, "engine_total": 38.18},
+    "timings_ms": {"pulse": 0.08, "occupants": 11.35, "field_model": 0.09, "engine_total": 11.42},
     "stored": True,
     "spooled": False,
 }

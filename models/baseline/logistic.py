@@ -32,7 +32,8 @@ from typing import Any, Final
 import numpy as np
 import numpy.typing as npt
 
-from models import limits
+from models import constants, limits
+from models.arrays import FloatArray
 from models.notification import Sex
 
 __all__ = [
@@ -52,7 +53,6 @@ __all__ = [
     "load_default",
 ]
 
-FloatArray = npt.NDArray[np.float64]
 
 #: Identifier of the artifact layout written by :mod:`models.offline.baseline.fit`.
 ARTIFACT_SCHEMA: Final[str] = "aacn-triage/baseline-logistic/1"
@@ -77,7 +77,7 @@ FEATURE_NAMES: Final[tuple[str, ...]] = (
 INPUT_FEATURE_NAMES: Final[tuple[str, ...]] = FEATURE_NAMES[1:]
 
 #: Two-sided 95 % standard normal quantile, ``Phi^-1(0.975)``.
-Z_95: Final[float] = 1.959963984540054
+Z_95: Final[float] = constants.Z_95
 
 #: Largest delta-V and age accepted (the engine's limits, ``models/limits.py``).
 MAX_DELTA_V_KMH: Final[float] = limits.MAX_DELTA_V_KMH

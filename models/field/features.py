@@ -25,8 +25,8 @@ from enum import StrEnum
 from typing import Final
 
 import numpy as np
-import numpy.typing as npt
 
+from models.arrays import FloatArray
 from models.impact_mode import ImpactMode
 from models.limits import MAX_AGE_YEARS, MAX_DELTA_V_KMH
 from models.notification import Occupant, Sex
@@ -43,8 +43,6 @@ __all__ = [
     "field_inputs",
     "field_mode",
 ]
-
-FloatArray = npt.NDArray[np.float64]
 
 
 class FieldMode(StrEnum):

@@ -35,8 +35,8 @@ from pathlib import Path
 from typing import Any, Final
 
 import numpy as np
-import numpy.typing as npt
 
+from models.arrays import FloatArray
 from models.codehash import source_tree_sha256
 from models.constants import Z_95
 from models.field.features import (
@@ -60,7 +60,6 @@ __all__ = [
     "load_default",
 ]
 
-FloatArray = npt.NDArray[np.float64]
 
 #: Identifier of the artifact layout written by the offline fit.
 ARTIFACT_SCHEMA: Final[str] = "aacn-triage/field-logistic/1"

@@ -37,6 +37,7 @@ from typing import Final
 import numpy as np
 import numpy.typing as npt
 
+from models.arrays import FloatArray
 from models.impact_mode import ImpactMode
 from models.injury import risk
 from models.injury.criteria import CTI_INTERCEPTS
@@ -51,7 +52,6 @@ __all__ = [
     "region_cumulative_risk_batch",
 ]
 
-FloatArray = npt.NDArray[np.float64]
 
 #: Measures the batch path reads (the fields of ``InjuryMeasures``).
 MEASURE_NAMES: Final[tuple[str, ...]] = tuple(f.name for f in fields(InjuryMeasures))

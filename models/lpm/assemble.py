@@ -19,8 +19,8 @@ from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
-import numpy.typing as npt
 
+from models.arrays import FloatArray
 from models.impact_mode import ImpactMode
 from models.lpm import kernel as K
 from models.lpm.interior import BodyPoint, ContactRow, interior_plane, surface_size
@@ -29,7 +29,6 @@ from models.notification import Body, Occupant, Seat
 
 __all__ = ["ContactSpec", "Model", "Restraints", "build_model"]
 
-FloatArray = npt.NDArray[np.float64]
 
 #: Clearance added to surfaces that touch the occupant in the neutral posture,
 #: m: keeps them exactly force-free at t = 0 despite rounding.

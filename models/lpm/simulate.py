@@ -33,6 +33,7 @@ import numpy as np
 import numpy.typing as npt
 from scipy.signal import filtfilt
 
+from models.arrays import FloatArray
 from models.constants import G_MS2
 from models.impact_mode import ImpactMode
 from models.injury.assessment import InjuryAssessment, InjuryMeasures, assess
@@ -70,7 +71,6 @@ __all__ = [
     "warm_up",
 ]
 
-FloatArray = npt.NDArray[np.float64]
 G0 = G_MS2  # standard gravity, m/s^2 (models.constants)
 
 STATUS_MESSAGES: Mapping[int, str] = MappingProxyType(

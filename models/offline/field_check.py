@@ -63,9 +63,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-import numpy.typing as npt
 from sklearn.metrics import roc_auc_score, roc_curve
 
+from models.arrays import BoolArray, FloatArray, IntArray
 from models.impact_mode import ImpactMode
 from models.injury.assessment import assess
 from models.notification import (
@@ -98,9 +98,6 @@ __all__ = [
     "run_field_check",
 ]
 
-FloatArray = npt.NDArray[np.float64]
-BoolArray = npt.NDArray[np.bool_]
-IntArray = npt.NDArray[np.int64]
 
 #: NASS ``dvcat`` bands in order (labels as in the data).
 BANDS: tuple[str, ...] = tuple(DELTA_V_BAND_MIDPOINTS_KMH)

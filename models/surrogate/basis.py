@@ -25,6 +25,8 @@ from collections.abc import Sequence
 import numpy as np
 import numpy.typing as npt
 
+from models.arrays import FloatArray, IntArray
+
 __all__ = [
     "Recurrence",
     "design_matrix",
@@ -35,8 +37,6 @@ __all__ = [
     "uniform_recurrence",
 ]
 
-FloatArray = npt.NDArray[np.float64]
-IntArray = npt.NDArray[np.int64]
 
 #: Recurrence coefficients of one input: ``(alpha, beta)``, each shape (degree + 1,).
 Recurrence = tuple[FloatArray, FloatArray]

@@ -54,9 +54,6 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Final
 
-import numpy as np
-import numpy.typing as npt
-
 import models.injury.batch as _batch_module
 from models.codehash import source_tree_sha256
 from models.surrogate.family import SurrogateFamily
@@ -83,8 +80,6 @@ __all__ = [
     "evaluation_sha256",
 ]
 
-FloatArray = npt.NDArray[np.float64]
-IntArray = npt.NDArray[np.int64]
 
 #: What turns the shipped artifacts into an answer (recorded with every case
 #: beside the artifacts' manifest checksum, so that a change of the

@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from models.arrays import FloatArray, IntArray
 from models.impact_mode import ImpactMode
 from models.injury.batch import p_iss15_batch
 from models.notification import Body
@@ -38,9 +39,6 @@ from models.surrogate.spec import (
     from_output_scale,
     to_output_scale,
 )
-
-FloatArray = npt.NDArray[np.float64]
-IntArray = npt.NDArray[np.int64]
 
 
 class SurrogateFamily:

@@ -11,11 +11,11 @@ from typing import Final
 import numpy as np
 import numpy.typing as npt
 
-FloatArray = npt.NDArray[np.float64]
-IntArray = npt.NDArray[np.int64]
+from models.arrays import FloatArray
+from models.constants import Z_95
 
 #: z of a two-sided 95% Gaussian interval.
-_Z95: Final[float] = 1.959963984540054
+_Z95: Final[float] = Z_95
 
 
 #: Default posture sensor standard deviation, deg: error within 5 deg 95% of the

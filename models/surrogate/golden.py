@@ -23,7 +23,6 @@ from dataclasses import replace
 from typing import Any, Final
 
 import numpy as np
-import numpy.typing as npt
 
 from models.impact_mode import ImpactMode
 from models.lpm.params import ParameterSet
@@ -45,7 +44,6 @@ __all__ = [
     "parameter_values_sha256",
 ]
 
-FloatArray = npt.NDArray[np.float64]
 
 #: Sampling rate of the haversine pulses fed to the LPM, Hz (the service's
 #: models.pulse.DEFAULT_OUTPUT_RATE_HZ).

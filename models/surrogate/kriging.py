@@ -40,7 +40,7 @@ from typing import Any, Final
 import numpy as np
 import numpy.typing as npt
 
-FloatArray = npt.NDArray[np.float64]
+from models.arrays import FloatArray
 
 #: Matern smoothness of the residual kernel (3/2; see the module notes).
 MATERN_NU: Final[float] = 1.5

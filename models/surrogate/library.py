@@ -8,9 +8,6 @@ from pathlib import Path
 from types import MappingProxyType
 from typing import Any
 
-import numpy as np
-import numpy.typing as npt
-
 from models.impact_mode import ImpactMode
 from models.notification import Body
 from models.surrogate.family import SurrogateFamily
@@ -20,9 +17,6 @@ from models.surrogate.spec import (
     family_name,
 )
 from models.surrogate.store import MANIFEST_NAME, read_artifact, sha256_file
-
-FloatArray = npt.NDArray[np.float64]
-IntArray = npt.NDArray[np.int64]
 
 
 def default_artifact_dir() -> Path:

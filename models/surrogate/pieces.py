@@ -15,6 +15,7 @@ import numpy as np
 import numpy.typing as npt
 from scipy.sparse import csr_array
 
+from models.arrays import FloatArray, IntArray
 from models.surrogate.basis import design_matrix, evaluate_univariate
 from models.surrogate.family_constants import _POSTURE, _SEAT
 from models.surrogate.kriging import ResidualKriging
@@ -23,10 +24,6 @@ from models.surrogate.spec import (
     INPUT_NAMES,
     to_unit,
 )
-
-FloatArray = npt.NDArray[np.float64]
-IntArray = npt.NDArray[np.int64]
-
 
 #: Inputs fixed over the sensor samples (delta-V, angle, duration), columns of INPUT_NAMES.
 _FIXED_INPUTS: Final[tuple[int, int, int]] = (0, 1, 4)

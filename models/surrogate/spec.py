@@ -34,6 +34,7 @@ from typing import Final
 import numpy as np
 import numpy.typing as npt
 
+from models.arrays import FloatArray
 from models.impact_mode import COVERAGE_DEG, ImpactMode
 from models.lpm.domain import POSTURE_RANGE_DEG, SEAT_TRACK_RANGE_MM
 from models.notification import Body
@@ -63,7 +64,6 @@ __all__ = [
     "to_output_scale",
 ]
 
-FloatArray = npt.NDArray[np.float64]
 
 #: Delta-V design range, km/h. The service accepts up to 200 km/h
 #: (models.pulse.MAX_DELTA_V_KMH), but above about 120 km/h every restraint

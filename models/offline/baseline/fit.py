@@ -86,6 +86,7 @@ import numpy.typing as npt
 import statsmodels.api as sm
 from sklearn.metrics import roc_auc_score
 
+from models.arrays import FloatArray, IntArray
 from models.baseline.logistic import (
     ARTIFACT_SCHEMA,
     FEATURE_NAMES,
@@ -112,8 +113,6 @@ __all__ = [
     "under_triage_threshold",
 ]
 
-FloatArray = npt.NDArray[np.float64]
-IntArray = npt.NDArray[np.int64]
 
 #: Midpoint used for each delta-V band of ``dvcat``, km/h (module docstring).
 DELTA_V_BAND_MIDPOINTS_KMH: Final[dict[str, float]] = {

@@ -23,6 +23,8 @@ import numpy.typing as npt
 from matplotlib.figure import Figure
 from tqdm import tqdm
 
+from models.arrays import FloatArray
+from models.constants import Z_95
 from models.field.features import FieldMode
 from models.notification import CrashNotification
 from models.offline.field.metrics import (
@@ -42,7 +44,6 @@ __all__ = [
     "write_evaluation",
 ]
 
-FloatArray = npt.NDArray[np.float64]
 
 #: Resamples behind each confidence interval of the report.
 N_BOOTSTRAP = 1000
@@ -326,7 +327,7 @@ def reliability_plot(
             k = float(yy[sel].sum())
             rate = k / n
             # Wilson 95 % interval of the observed rate
-            z = 1.959963984540054
+            z = Z_95
             centre = (rate + z * z / (2 * n)) / (1 + z * z / n)
             half = z * np.sqrt(rate * (1 - rate) / n + z * z / (4 * n * n)) / (1 + z * z / n)
             xs.append(float(pp[sel].mean()))

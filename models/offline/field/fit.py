@@ -62,6 +62,7 @@ from sklearn.linear_model import LogisticRegression
 from sklearn.model_selection import RepeatedStratifiedKFold, StratifiedKFold
 from tqdm import tqdm
 
+from models.arrays import BoolArray, FloatArray
 from models.field.features import (
     FEATURE_NAMES,
     FieldInputs,
@@ -109,8 +110,6 @@ __all__ = [
     "fit_field",
 ]
 
-FloatArray = npt.NDArray[np.float64]
-BoolArray = npt.NDArray[np.bool_]
 
 MODEL_NAME: Final[str] = "field_mais3"
 MODEL_VERSION: Final[str] = "1.0.0"

@@ -22,6 +22,8 @@ import numpy.typing as npt
 import statsmodels.api as sm
 from sklearn.metrics import roc_auc_score
 
+from models.arrays import FloatArray, IntArray
+
 __all__ = [
     "Calibration",
     "TriageRates",
@@ -33,8 +35,6 @@ __all__ = [
     "triage_rates",
 ]
 
-FloatArray = npt.NDArray[np.float64]
-IntArray = npt.NDArray[np.int64]
 
 #: Probabilities are clipped to [EPS, 1 - EPS] before taking a logit.
 _EPS = 1e-9

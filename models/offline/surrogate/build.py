@@ -47,6 +47,7 @@ import numpy as np
 import numpy.typing as npt
 
 from models import ENGINE_VERSION
+from models.arrays import FloatArray
 from models.offline.surrogate.fit import MAX_DEGREE, SparseFit, fit_adaptive, fit_degree
 from models.offline.surrogate.kriging_fit import fit_residual_kriging
 from models.offline.surrogate.runs import (
@@ -103,7 +104,6 @@ __all__ = [
     "write_manifest",
 ]
 
-FloatArray = npt.NDArray[np.float64]
 
 #: Base seed of every design and bootstrap (families derive theirs from it and their name).
 DEFAULT_SEED = 20261123

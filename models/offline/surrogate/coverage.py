@@ -9,15 +9,14 @@ from collections.abc import Mapping, Sequence
 from typing import Any
 
 import numpy as np
-import numpy.typing as npt
 
+from models.arrays import FloatArray
 from models.offline.surrogate.runs import lpm_outputs
 from models.surrogate.evaluate import SurrogateFamily, SurrogateLibrary, UncertaintyResult
 from models.surrogate.spec import FAMILIES, P_RESOLUTION
 
 __all__ = ["COVERAGE_SEED", "MEASURE_DRAWS", "coverage_check", "measure_coverage_check"]
 
-FloatArray = npt.NDArray[np.float64]
 
 #: Seed of the coverage cases drawn by :func:`coverage_check`.
 COVERAGE_SEED = 5

@@ -25,6 +25,8 @@ from dataclasses import dataclass
 import numpy as np
 import numpy.typing as npt
 
+from models.arrays import FloatArray, IntArray
+
 __all__ = [
     "MAX_DEGREE",
     "SparseFit",
@@ -35,8 +37,6 @@ __all__ = [
     "nested_ols_loo",
 ]
 
-FloatArray = npt.NDArray[np.float64]
-IntArray = npt.NDArray[np.int64]
 
 #: Largest PCE degree tried (reference paper section 2.5: truncated at 15).
 MAX_DEGREE = 15

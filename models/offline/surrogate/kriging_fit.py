@@ -11,8 +11,8 @@ import warnings
 from typing import Any
 
 import numpy as np
-import numpy.typing as npt
 
+from models.arrays import FloatArray
 from models.surrogate.kriging import (
     LENGTH_SCALE_BOUNDS,
     LENGTH_SCALE_START,
@@ -22,8 +22,6 @@ from models.surrogate.kriging import (
 )
 
 __all__ = ["fit_residual_kriging"]
-
-FloatArray = npt.NDArray[np.float64]
 
 
 def fit_residual_kriging(

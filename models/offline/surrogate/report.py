@@ -54,8 +54,6 @@ __all__ = [
     "write_report",
 ]
 
-FloatArray = npt.NDArray[np.float64]
-
 
 #: Nominal crash of the table's standard deviations: delta-V (km/h), |angle|
 #: (deg), posture (deg, neutral 5.8), seat track (mm), duration (ms).

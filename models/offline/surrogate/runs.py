@@ -15,6 +15,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from models.arrays import FloatArray
 from models.impact_mode import ImpactMode
 from models.surrogate.golden import PULSE_RATE_HZ, SIMULATED_S, family_outputs, family_run
 from models.surrogate.spec import FamilySpec
@@ -31,7 +32,6 @@ __all__ = [
     "service_raw_threshold",
 ]
 
-FloatArray = npt.NDArray[np.float64]
 
 #: An ISS15+ decision from a probability: P(ISS >= 15) >= 0.5 (the more likely class).
 ISS15_DECISION_PROBABILITY = 0.5

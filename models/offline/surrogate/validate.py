@@ -39,8 +39,8 @@ from pathlib import Path
 from typing import Any, Final
 
 import numpy as np
-import numpy.typing as npt
 
+from models.arrays import FloatArray
 from models.impact_mode import ImpactMode
 from models.offline.paths import docs_dir
 from models.surrogate.evaluate import SurrogateFamily, SurrogateLibrary
@@ -71,7 +71,6 @@ __all__ = [
     "write_validation",
 ]
 
-FloatArray = npt.NDArray[np.float64]
 
 #: Seed of the fresh validation points (the date they were first drawn). No
 #: build or design decision was taken on these points; keep it that way (a new
