@@ -960,40 +960,46 @@ def _occupant_evidence(
     return OccupantEvidence(
         index=index,
         impact=impact,
-        field_inputs=field_inputs(
-            occupant,
-            pulse.delta_v_kmh,
-            impact.mode,
-            multiple_impacts=notification.multiple_impacts,
-            rollover=notification.rollover,
-        ),  # as notification_field_inputs
+        field_inputs=_field_inputs(occupant, notification, pulse, impact),
         baseline=_baseline_decision(models, occupant, pulse, impact),
         occupant_model=answer,
+    )
+
+
+def _field_inputs(
+    occupant: Occupant,
+    notification: CrashNotification,
+    pulse: ProcessedPulse,
+    impact: ImpactClassification,
+) -> FieldInputs:
+    """The field model's inputs of one occupant (a request and the offline fit alike)."""
+    return field_inputs(
+        occupant,
+        pulse.delta_v_kmh,
+        impact.mode,
+        multiple_impacts=notification.multiple_impacts,
+        rollover=notification.rollover,
     )
 
 
 def _occupant_triage(
     occupant: Occupant, evidence: OccupantEvidence, decision: TriageDecision, mode: FieldMode
 ) -> OccupantTriage:
-    answer = evidence.occupant_model
-    if answer is None:
-        return OccupantTriage(
-            seat=occupant.seat,
-            body=occupant.body,
-            impact=evidence.impact,
-            method=Method.FIELD,
-            triage=decision,
-            baseline=evidence.baseline,
-            field_mode=mode,
-        )
-    return OccupantTriage(
+    decided = OccupantTriage(
         seat=occupant.seat,
         body=occupant.body,
         impact=evidence.impact,
-        method=Method.LPM,
+        method=Method.FIELD,
         triage=decision,
         baseline=evidence.baseline,
         field_mode=mode,
+    )
+    answer = evidence.occupant_model
+    if answer is None:
+        return decided
+    return dataclasses.replace(
+        decided,
+        method=Method.LPM,
         occupant_model=answer.decision,
         iss=answer.iss,
         region_ais=answer.region_ais,
@@ -1017,15 +1023,7 @@ def notification_field_inputs(notification: CrashNotification) -> list[FieldInpu
     out = []
     for occupant in notification.occupants:
         impact = classify_impact(pulse.pdof_deg, occupant.seat, notification.drive_side)
-        out.append(
-            field_inputs(
-                occupant,
-                pulse.delta_v_kmh,
-                impact.mode,
-                multiple_impacts=notification.multiple_impacts,
-                rollover=notification.rollover,
-            )
-        )
+        out.append(_field_inputs(occupant, notification, pulse, impact))
     return out
 
 

@@ -3,10 +3,17 @@
 from __future__ import annotations
 
 import copy
+import os
+import shutil
+import subprocess
 import uuid
+from collections.abc import Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
+import pytest
 from fastapi.testclient import TestClient
 
 from service.schemas import EXAMPLE_NOTIFICATIONS
@@ -86,3 +93,47 @@ def wait_ready(base: str, server: Any, log_path: Any, timeout_s: float = 120.0) 
             raise AssertionError(f"server exited: {log_path.read_text()[-3000:]}")
         time.sleep(0.1)
     raise AssertionError(f"server never became ready: {log_path.read_text()[-3000:]}")
+
+
+@contextmanager
+def console_server(
+    tmp_path: Path, *serve_args: str
+) -> Iterator[tuple[subprocess.Popen[bytes], str, str, Path]]:
+    """The installed ``aacn-triage serve`` on a free port, with an admin key, until ready.
+
+    Yields ``(process, base URL, admin key, log path)``; the process is stopped
+    afterwards if it still runs. Skips when the console script is not installed.
+    """
+    exe = shutil.which("aacn-triage")
+    if exe is None:
+        pytest.skip("the console script is not installed (pip install -e .)")
+    env = {**os.environ, "AACN_DATABASE_URL": f"sqlite:///{tmp_path / 'served.db'}"}
+    key = subprocess.run(
+        [exe, "keys", "create", "--role", "admin", "--name", "ops"],
+        env=env,
+        capture_output=True,
+        text=True,
+        check=True,
+        timeout=120,
+    ).stdout.strip()
+    port = free_port()
+    log = tmp_path / "server.log"
+    with log.open("w") as sink:
+        server = subprocess.Popen(
+            [exe, "serve", "--port", str(port), *serve_args],
+            env=env,
+            stdout=sink,
+            stderr=subprocess.STDOUT,
+        )
+    base = f"http://127.0.0.1:{port}"
+    try:
+        wait_ready(base, server, log)
+        yield server, base, key, log
+    finally:
+        if server.poll() is None:
+            server.terminate()
+            try:
+                server.wait(timeout=30)
+            except subprocess.TimeoutExpired:
+                server.kill()
+                server.wait(timeout=30)

@@ -3,11 +3,6 @@
 from __future__ import annotations
 
 import json
-import os
-import shutil
-import socket
-import subprocess
-import time
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -16,7 +11,7 @@ import pytest
 
 from service import cli
 from service.settings import get_settings
-from tests.support import example, summary
+from tests.support import console_server, example, summary
 
 
 @pytest.fixture
@@ -128,44 +123,8 @@ def test_batch_pool_matches_one_process(tmp_path: Path) -> None:
     assert outs[0] == outs[1]
 
 
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
-
-
 def test_console_script_serves_real_http(tmp_path: Path) -> None:
-    exe = shutil.which("aacn-triage")
-    if exe is None:
-        pytest.skip("the console script is not installed (pip install -e .)")
-    env = {**os.environ, "AACN_DATABASE_URL": f"sqlite:///{tmp_path / 'served.db'}"}
-    key = subprocess.run(
-        [exe, "keys", "create", "--role", "admin", "--name", "ops"],
-        env=env,
-        capture_output=True,
-        text=True,
-        check=True,
-        timeout=120,
-    ).stdout.strip()
-    port = _free_port()
-    log = tmp_path / "server.log"
-    with log.open("w") as sink:
-        server = subprocess.Popen(
-            [exe, "serve", "--port", str(port)], env=env, stdout=sink, stderr=subprocess.STDOUT
-        )
-    try:
-        base = f"http://127.0.0.1:{port}"
-        for _ in range(600):  # up to 60 s for a cold start on a busy machine
-            try:
-                if httpx.get(base + "/readyz", timeout=1.0).status_code == 200:
-                    break
-            except httpx.TransportError:
-                pass
-            if server.poll() is not None:
-                pytest.fail(f"server exited: {log.read_text()}")
-            time.sleep(0.1)
-        else:
-            pytest.fail(f"server never became ready: {log.read_text()}")
+    with console_server(tmp_path) as (_server, base, key, _log):
         h = {"Authorization": f"Bearer {key}"}
         for kind in ("summary", "delta_v", "acceleration"):
             body = example(kind)
@@ -178,9 +137,6 @@ def test_console_script_serves_real_http(tmp_path: Path) -> None:
             assert replay.status_code == 200
             assert replay.headers["idempotent-replayed"] == "true"
         assert httpx.post(base + "/v1/cases", json=body, timeout=30).status_code == 401
-    finally:
-        server.terminate()
-        server.wait(timeout=30)
 
 
 def test_simulate_prints_measures_and_draws_a_plot(

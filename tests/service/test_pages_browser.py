@@ -15,10 +15,8 @@ from __future__ import annotations
 import os
 import secrets
 import shutil
-import socket
 import subprocess
 import sys
-import time
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -35,6 +33,7 @@ from tests.service.pages_support import (
     rear_seat_rollover,
     side_edr,
 )
+from tests.support import free_port, wait_ready
 
 pytestmark = pytest.mark.browser
 
@@ -119,12 +118,6 @@ class Served:
         return f"{self.base}/v1/cases/{self.cases[name]['case_id']}/report"
 
 
-def _free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return int(s.getsockname()[1])
-
-
 @pytest.fixture(scope="module")
 def served(chromium: Any, tmp_path_factory: pytest.TempPathFactory) -> Iterator[Served]:
     """The service as a process of its own, with keys and five real cases."""
@@ -151,7 +144,7 @@ def served(chromium: Any, tmp_path_factory: pytest.TempPathFactory) -> Iterator[
         "auditor": key("auditor", "ems-supervisor"),
         "submitter": key("submitter", "call-center-north"),
     }
-    port = _free_port()
+    port = free_port()
     log = tmp / "server.log"
     with log.open("w") as sink:
         server = subprocess.Popen(
@@ -159,18 +152,7 @@ def served(chromium: Any, tmp_path_factory: pytest.TempPathFactory) -> Iterator[
         )
     base = f"http://127.0.0.1:{port}"
     try:
-        deadline = time.monotonic() + 180  # a cold start on a busy machine
-        while True:
-            try:
-                if httpx.get(base + "/readyz", timeout=2.0).status_code == 200:
-                    break
-            except httpx.TransportError:
-                pass
-            if server.poll() is not None:
-                pytest.fail(f"server exited: {log.read_text()}")
-            if time.monotonic() > deadline:
-                pytest.fail(f"server never became ready: {log.read_text()}")
-            time.sleep(0.2)
+        wait_ready(base, server, log, timeout_s=180)  # a cold start on a busy machine
         out = Served(base=base, keys=keys)
         submit = {"Authorization": f"Bearer {keys['submitter']}"}
         audit = {"Authorization": f"Bearer {keys['auditor']}"}

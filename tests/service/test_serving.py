@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import json
-import os
-import shutil
 import signal
 import socket
 import subprocess
@@ -15,7 +13,7 @@ from pathlib import Path
 import httpx2 as httpx
 import pytest
 
-from tests.support import example, free_port, wait_ready
+from tests.support import console_server, example
 
 #: Requests in flight when SIGTERM arrives.
 IN_FLIGHT = 10
@@ -23,35 +21,8 @@ IN_FLIGHT = 10
 
 @pytest.fixture
 def served(tmp_path: Path) -> Iterator[tuple[subprocess.Popen[bytes], str, str, Path]]:
-    exe = shutil.which("aacn-triage")
-    if exe is None:
-        pytest.skip("the console script is not installed (pip install -e .)")
-    env = {**os.environ, "AACN_DATABASE_URL": f"sqlite:///{tmp_path / 'served.db'}"}
-    key = subprocess.run(
-        [exe, "keys", "create", "--role", "admin", "--name", "ops"],
-        env=env,
-        capture_output=True,
-        text=True,
-        check=True,
-        timeout=120,
-    ).stdout.strip()
-    port = free_port()
-    log = tmp_path / "server.log"
-    with log.open("w") as sink:
-        server = subprocess.Popen(
-            [exe, "serve", "--port", str(port), "--workers", "2"],
-            env=env,
-            stdout=sink,
-            stderr=subprocess.STDOUT,
-        )
-    base = f"http://127.0.0.1:{port}"
-    try:
-        wait_ready(base, server, log)
-        yield server, base, key, log
-    finally:
-        if server.poll() is None:
-            server.kill()
-            server.wait(timeout=30)
+    with console_server(tmp_path, "--workers", "2") as running:
+        yield running
 
 
 def _raw_post(port: int, key: str, body: bytes) -> socket.socket:

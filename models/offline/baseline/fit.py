@@ -491,6 +491,117 @@ def _matrix(a: FloatArray) -> list[list[float]]:
     return [[float(v) for v in row] for row in a]
 
 
+def _iso_fit_date(fit_date: str | None) -> str:
+    """`fit_date` normalised to ISO 8601, or today (UTC) when None."""
+    if fit_date is None:
+        return dt.datetime.now(dt.UTC).date().isoformat()
+    try:
+        return dt.date.fromisoformat(fit_date).isoformat()
+    except (TypeError, ValueError):
+        raise ValueError(
+            f"`fit_date` must be an ISO date (YYYY-MM-DD), got {fit_date!r}."
+        ) from None
+
+
+def _model_and_features_doc() -> dict[str, Any]:
+    """The artifact's fixed description of the model and of its features."""
+    return {
+        "model": {
+            "name": MODEL_NAME,
+            "version": MODEL_VERSION,
+            "description": (
+                "Survey-weighted logistic regression of police-reported incapacitating or "
+                "fatal injury (NASS-CDS injSeverity 3 or 4; a proxy for ISS15+, not ISS15+) "
+                "of front-seat occupants of towed passenger vehicles, US, 1997-2000."
+            ),
+            "library": "statsmodels GLM(Binomial, logit link), var_weights = weight / mean",
+        },
+        "features": {
+            "intercept": {"encoding": "1"},
+            "delta_v_kmh": {
+                "unit": "km/h",
+                "source_column": "dvcat",
+                "encoding": "band midpoint at fit time; continuous at predict time",
+                "band_midpoints_kmh": dict(DELTA_V_BAND_MIDPOINTS_KMH),
+                "open_band_rule": "55+ taken as a 15 km/h band 55-69, midpoint 62 km/h",
+            },
+            "belted": {"source_column": "seatbelt", "encoding": "1 if 'belted' else 0"},
+            "airbag_deployed": {"source_column": "deploy", "encoding": "1 if deploy == 1"},
+            "frontal": {
+                "source_column": "frontal",
+                "encoding": "1 frontal impact, 0 side or rear (not distinguished)",
+            },
+            "age_years": {"unit": "year", "source_column": "ageOFocc", "encoding": "linear"},
+            "male": {"source_column": "sex", "encoding": "1 if 'm' else 0"},
+        },
+    }
+
+
+def _threshold_doc(threshold: float) -> dict[str, Any]:
+    """The artifact's ``threshold`` section: the value, its rule and why."""
+    return {
+        "value": threshold,
+        "rule": (
+            f"largest threshold (floored to {THRESHOLD_RESOLUTION}) with weighted "
+            f"out-of-fold under-triage <= {UNDER_TRIAGE_TARGET} ({CV_FOLDS}-fold CV)"
+        ),
+        "why": (
+            "ACS-COT field-triage benchmark: under-triage <= 5 %; missing a seriously "
+            "injured occupant costs more than an unneeded trauma-centre alert. The "
+            "over-triage that results exceeds the 25-50 % benchmark (see metrics)."
+        ),
+        "flag_when": "probability >= value",
+    }
+
+
+def _holdout_2000(
+    data: _Data, seed: int, threshold: float
+) -> tuple[dict[str, Any], npt.NDArray[np.int64], npt.NDArray[np.int64]]:
+    """Held out by year: the model and its threshold chosen on 1997-1999, judged on 2000.
+
+    Returns
+    -------
+    metrics : dict
+        The artifact's ``metrics.holdout_2000`` section.
+    train, test : ndarray of int64
+        Row indices of the two parts.
+    """
+    x, y, w = data.x, data.y, data.weight
+    train = np.flatnonzero(data.year < HOLDOUT_YEAR).astype(np.int64)
+    test = np.flatnonzero(data.year == HOLDOUT_YEAR).astype(np.int64)
+    beta_tr = _fit_glm(x[train], y[train], w[train])
+    oof_tr, _ = _out_of_fold(data, train, seed)
+    thr_tr = under_triage_threshold(y[train], oof_tr, w[train])
+    p_te = _expit(x[test] @ beta_tr)
+    ho_ut, ho_ot = triage_rates(y[test], p_te, w[test], thr_tr)
+    ho_ut_s, ho_ot_s = triage_rates(y[test], p_te, w[test], threshold)
+    metrics = {
+        "fitted_on": "accident years 1997-1999",
+        "auc": _auc(y[test], p_te, w[test]),
+        "auc_unweighted": float(roc_auc_score(y[test], p_te)),
+        "threshold_chosen_on_1997_1999": thr_tr,
+        "under_triage": ho_ut,
+        "over_triage": ho_ot,
+        "under_triage_at_shipped_threshold": ho_ut_s,
+        "over_triage_at_shipped_threshold": ho_ot_s,
+    }
+    return metrics, train, test
+
+
+def _counts(
+    data: _Data, train: npt.NDArray[np.int64], test: npt.NDArray[np.int64]
+) -> dict[str, int]:
+    """Row, outcome, cluster and crash counts of the data and of the year hold-out."""
+    counts = dict(data.counts)
+    counts["rows_serious"] = int(data.y.sum())
+    counts["rows_not_serious"] = int(data.y.size - data.y.sum())
+    counts["psu_clusters"] = int(np.unique(data.psu).size)
+    counts["crashes"] = int(np.unique(data.crash).size)
+    counts["rows_holdout_train"] = int(train.size)
+    counts["rows_holdout_test"] = int(test.size)
+    return counts
+
+
 def fit_baseline(
     csv_path: str | Path,
     out_path: str | Path,
@@ -525,15 +636,7 @@ def fit_baseline(
         If the regression does not converge.
     """
     csv_path, out_path = Path(csv_path), Path(out_path)
-    if fit_date is None:
-        fit_date = dt.datetime.now(dt.UTC).date().isoformat()
-    else:
-        try:
-            fit_date = dt.date.fromisoformat(fit_date).isoformat()
-        except (TypeError, ValueError):
-            raise ValueError(
-                f"`fit_date` must be an ISO date (YYYY-MM-DD), got {fit_date!r}."
-            ) from None
+    fit_date = _iso_fit_date(fit_date)
     data = _load(csv_path)
     x, y, w = data.x, data.y, data.weight
     all_rows = np.arange(y.size, dtype=np.int64)
@@ -550,15 +653,7 @@ def fit_baseline(
     cv_ut, cv_ot = triage_rates(y, oof, w, threshold)
     in_ut, in_ot = triage_rates(y, p_in, w, threshold)
 
-    # Held out by year: everything chosen on 1997-1999 only.
-    train = np.flatnonzero(data.year < HOLDOUT_YEAR).astype(np.int64)
-    test = np.flatnonzero(data.year == HOLDOUT_YEAR).astype(np.int64)
-    beta_tr = _fit_glm(x[train], y[train], w[train])
-    oof_tr, _ = _out_of_fold(data, train, seed)
-    thr_tr = under_triage_threshold(y[train], oof_tr, w[train])
-    p_te = _expit(x[test] @ beta_tr)
-    ho_ut, ho_ot = triage_rates(y[test], p_te, w[test], thr_tr)
-    ho_ut_s, ho_ot_s = triage_rates(y[test], p_te, w[test], threshold)
+    holdout, train, test = _holdout_2000(data, seed, threshold)
 
     operating_points = []
     for t in sorted({*COMPARISON_THRESHOLDS, threshold}):
@@ -568,26 +663,10 @@ def fit_baseline(
     sev_weights = w / w.sum()
     impute_age = float(np.sum(sev_weights * x[:, 5]))
     impute_male = float(np.sum(sev_weights * x[:, 6]))
-    counts = dict(data.counts)
-    counts["rows_serious"] = int(y.sum())
-    counts["rows_not_serious"] = int(y.size - y.sum())
-    counts["psu_clusters"] = int(np.unique(data.psu).size)
-    counts["crashes"] = int(np.unique(data.crash).size)
-    counts["rows_holdout_train"] = int(train.size)
-    counts["rows_holdout_test"] = int(test.size)
 
     doc: dict[str, Any] = {
         "schema": ARTIFACT_SCHEMA,
-        "model": {
-            "name": MODEL_NAME,
-            "version": MODEL_VERSION,
-            "description": (
-                "Survey-weighted logistic regression of police-reported incapacitating or "
-                "fatal injury (NASS-CDS injSeverity 3 or 4; a proxy for ISS15+, not ISS15+) "
-                "of front-seat occupants of towed passenger vehicles, US, 1997-2000."
-            ),
-            "library": "statsmodels GLM(Binomial, logit link), var_weights = weight / mean",
-        },
+        **_model_and_features_doc(),
         "fit_date": fit_date,
         "seed": seed,
         "outcome": {
@@ -598,24 +677,6 @@ def fit_baseline(
             "weighted_prevalence": float(np.sum(sev_weights * y)),
         },
         "feature_names": list(FEATURE_NAMES),
-        "features": {
-            "intercept": {"encoding": "1"},
-            "delta_v_kmh": {
-                "unit": "km/h",
-                "source_column": "dvcat",
-                "encoding": "band midpoint at fit time; continuous at predict time",
-                "band_midpoints_kmh": dict(DELTA_V_BAND_MIDPOINTS_KMH),
-                "open_band_rule": "55+ taken as a 15 km/h band 55-69, midpoint 62 km/h",
-            },
-            "belted": {"source_column": "seatbelt", "encoding": "1 if 'belted' else 0"},
-            "airbag_deployed": {"source_column": "deploy", "encoding": "1 if deploy == 1"},
-            "frontal": {
-                "source_column": "frontal",
-                "encoding": "1 frontal impact, 0 side or rear (not distinguished)",
-            },
-            "age_years": {"unit": "year", "source_column": "ageOFocc", "encoding": "linear"},
-            "male": {"source_column": "sex", "encoding": "1 if 'm' else 0"},
-        },
         "coefficients": [float(b) for b in beta],
         "standard_errors": [float(s) for s in se],
         "covariance": _matrix(cov),
@@ -629,24 +690,12 @@ def fit_baseline(
             "male": impute_male,
             "rule": "unknown age or sex -> weighted mean of the training rows",
         },
-        "threshold": {
-            "value": threshold,
-            "rule": (
-                f"largest threshold (floored to {THRESHOLD_RESOLUTION}) with weighted "
-                f"out-of-fold under-triage <= {UNDER_TRIAGE_TARGET} ({CV_FOLDS}-fold CV)"
-            ),
-            "why": (
-                "ACS-COT field-triage benchmark: under-triage <= 5 %; missing a seriously "
-                "injured occupant costs more than an unneeded trauma-centre alert. The "
-                "over-triage that results exceeds the 25-50 % benchmark (see metrics)."
-            ),
-            "flag_when": "probability >= value",
-        },
+        "threshold": _threshold_doc(threshold),
         "data": {
             "file": csv_path.name,
             "sha256": _sha256(csv_path),
             "source": "NASS-CDS 1997-2000 via R package DAAG nassCDS (see PROVENANCE.md)",
-            "counts": counts,
+            "counts": _counts(data, train, test),
         },
         "metrics": {
             "definitions": {
@@ -654,16 +703,7 @@ def fit_baseline(
                 "under_triage": "weighted share of serious-injury occupants with p < threshold",
                 "over_triage": "weighted share of other occupants with p >= threshold",
             },
-            "holdout_2000": {
-                "fitted_on": "accident years 1997-1999",
-                "auc": _auc(y[test], p_te, w[test]),
-                "auc_unweighted": float(roc_auc_score(y[test], p_te)),
-                "threshold_chosen_on_1997_1999": thr_tr,
-                "under_triage": ho_ut,
-                "over_triage": ho_ot,
-                "under_triage_at_shipped_threshold": ho_ut_s,
-                "over_triage_at_shipped_threshold": ho_ot_s,
-            },
+            "holdout_2000": holdout,
             "cv5": {
                 "folds": CV_FOLDS,
                 "grouping": "by crash (accident year, PSU, case); seeded permutation",
@@ -699,8 +739,8 @@ def fit_baseline(
         cv_auc_mean=doc["metrics"]["cv5"]["auc_mean"],
         cv_under_triage=cv_ut,
         cv_over_triage=cv_ot,
-        holdout_under_triage=ho_ut,
-        holdout_over_triage=ho_ot,
+        holdout_under_triage=holdout["under_triage"],
+        holdout_over_triage=holdout["over_triage"],
     )
 
 

@@ -473,40 +473,40 @@ def _model_scores(
     return ModelScores(name, description, per_repeat, ci, by_mode, cal, diff)
 
 
-def fit_field(
-    config: FitConfig | None = None,
-    *,
-    cache_dir: Path | None = None,
-    workers: int | None = None,
-    progress: bool = True,
-) -> FieldFit:
-    """Fit, cross-validate and describe the field model (see the module docstring).
+@dataclass(frozen=True)
+class _CrossValidation:
+    """Out-of-fold scores of the compared models and the operating points' held-out flags.
 
-    Returns
-    -------
-    FieldFit
-        The artifact document (not yet written) and the report's figures.
+    Attributes
+    ----------
+    splits : list of (ndarray, ndarray)
+        The outer (train, test) index pairs, repeat by repeat.
+    oof : dict of str to ndarray, shape (repeats, n)
+        Out-of-fold probabilities of each fitted model.
+    flags : dict of str to ndarray of bool, shape (repeats, n)
+        Held-out flags of each operating point (thresholds set on the training part).
+    chosen_c : list of float
+        The penalty chosen inside each training part.
     """
-    cfg = config or FitConfig()
-    data = calibration_design()
-    x, y, modes, imputation, inputs = data.x, data.y, data.modes, data.imputation, data.inputs
-    notes = [row_notification(r) for r in data.rows]
-    evidence = evidence_for(
-        notes,
-        f"mais-{data.sha256[:12]}",
-        cache_dir=cache_dir,
-        workers=workers,
-        progress=progress,
-    )
-    if [ev.inputs for ev in evidence] != list(inputs):
-        raise RuntimeError("the engine's field inputs differ from notification_field_inputs")
-    data_sha = data.sha256
+
+    splits: list[tuple[npt.NDArray[np.int64], npt.NDArray[np.int64]]]
+    oof: dict[str, FloatArray]
+    flags: dict[str, BoolArray]
+    chosen_c: list[float]
+
+
+def _cross_validate(
+    x: FloatArray,
+    x_phys: FloatArray,
+    y: FloatArray,
+    modes: Sequence[FieldMode],
+    cfg: FitConfig,
+    progress: bool,
+) -> _CrossValidation:
+    """Step 2 and 3 of the module docstring: every model on the same repeated folds."""
     col = {name: i for i, name in enumerate(FEATURE_NAMES)}
     x_plain = x[:, [col[c] for c in _PLAIN_COLUMNS]]
     x_dv = x[:, [col["intercept"], col["delta_v_kmh"]]]
-    x_phys = np.column_stack([x, _physics_columns(evidence)])
-    p_prev = np.array([ev.p_previous_decision for ev in evidence])
-
     splitter = RepeatedStratifiedKFold(
         n_splits=cfg.n_splits, n_repeats=cfg.n_repeats, random_state=cfg.seed
     )
@@ -538,10 +538,27 @@ def fit_field(
         per_mode = _per_mode_thresholds(y[tr], inner, tr_modes, cfg)
         flags["sens80_per_mode"][rep, te] = _flags(p_te, te_modes, per_mode)
         flags["bahouth"][rep, te] = _flags(p_te, te_modes, BAHOUTH_THRESHOLDS)
+    return _CrossValidation(splits, oof, flags, chosen_c)
 
-    # the final fit: the penalty and the thresholds from the whole file's CV
+
+def _final_fit(
+    x: FloatArray,
+    y: FloatArray,
+    modes: list[FieldMode],
+    splits: Sequence[tuple[npt.NDArray[np.int64], npt.NDArray[np.int64]]],
+    cfg: FitConfig,
+) -> tuple[float, FloatArray, dict[str, dict[FieldMode, float]]]:
+    """The penalty, the coefficients and the operating points' thresholds from the whole file.
+
+    Returns
+    -------
+    c_final : float
+    beta : ndarray, shape (k,)
+    thresholds : dict of str to dict of FieldMode to float
+    """
     c_final, _ = _inner_oof(x, y, cfg.c_grid, cfg.n_splits, cfg.seed)
     beta = penalised_fit(x, y, c_final)
+    r_n = cfg.n_repeats
     full_oof = np.zeros((r_n, y.size))
     for k, (tr, te) in enumerate(splits):
         full_oof[k // cfg.n_splits, te] = _expit(x[te] @ penalised_fit(x[tr], y[tr], c_final))
@@ -556,11 +573,14 @@ def fit_field(
         "bahouth": dict(BAHOUTH_THRESHOLDS),
     }
     _check_monotone(beta)
+    return c_final, beta, thresholds
 
-    # bootstrap refits (the service's interval) and the borrowed sex offset
-    police = field_cases(police_data_path())
-    sex = _sex_offset(police, cfg.n_bootstrap, cfg.seed)
-    boot = np.empty((cfg.n_bootstrap, beta.size))
+
+def _bootstrap_refits(
+    x: FloatArray, y: FloatArray, c: float, cfg: FitConfig, progress: bool
+) -> FloatArray:
+    """Step 5: coefficients refitted on stratified resamples, shape (n_bootstrap, k)."""
+    boot = np.empty((cfg.n_bootstrap, x.shape[1]))
     for b, ix in enumerate(
         tqdm(
             stratified_bootstrap_indices(y, cfg.n_bootstrap, cfg.seed + 1),
@@ -568,53 +588,71 @@ def fit_field(
             disable=not progress,
         )
     ):
-        boot[b] = penalised_fit(x[ix], y[ix], c_final)
+        boot[b] = penalised_fit(x[ix], y[ix], c)
+    return boot
 
-    # figures
-    indices = stratified_bootstrap_indices(y, cfg.n_metric_bootstrap, cfg.seed + 2)
-    prev = np.tile(p_prev, (r_n, 1))
+
+def _compared_scores(
+    y: FloatArray,
+    modes: Sequence[FieldMode],
+    oof: dict[str, FloatArray],
+    indices: Sequence[npt.NDArray[np.int64]],
+) -> list[ModelScores]:
+    """The figures of every compared model (``oof`` includes ``occupant_models``)."""
     specs = [
-        ("field", "field model: telematics (the decision)", oof["field"], True),
+        ("field", "field model: telematics (the decision)", True),
         (
             "field_physics",
             "field model + physics (occupant-model logit P(ISS>=15) where it runs)",
-            oof["field_physics"],
             True,
         ),
-        ("plain", "plain logistic regression on the telematics fields", oof["plain"], True),
-        ("delta_v", "delta-V alone (logistic)", oof["delta_v"], True),
+        ("plain", "plain logistic regression on the telematics fields", True),
+        ("delta_v", "delta-V alone (logistic)", True),
         (
             "occupant_models",
             "occupant models' P(ISS>=15) as decided before (baseline outside coverage)",
-            prev,
             False,
         ),
     ]
-    scores = [
-        _model_scores(n, d, y, o, modes, indices, prob, None if n == "field" else oof["field"])
-        for n, d, o, prob in specs
+    return [
+        _model_scores(n, d, y, oof[n], modes, indices, prob, None if n == "field" else oof["field"])
+        for n, d, prob in specs
     ]
-    op_figures = _operating_point_figures(y, modes, flags, indices, thresholds)
+
+
+def _physics_verdict(scores: Sequence[ModelScores]) -> str:
+    """The sentence on the physics features; raises if they help (the artifact lacks them)."""
     phys = next(s for s in scores if s.name == "field_physics")
     assert phys.difference_to_field is not None
     d_phys, ci_phys = phys.difference_to_field
-    physics_kept = False
-    verdict = (
-        f"Physics features do not help: adding the occupant model's P(ISS >= 15) changes the "
-        f"cross-validated AUC by {-d_phys:+.4f} (95 % CI {-ci_phys[1]:+.4f} to "
-        f"{-ci_phys[0]:+.4f}); the field model decides on telematics alone, and the "
-        "occupant models stay in every answer as the physics explanation."
-        if ci_phys[0] > -0.005
-        else f"Physics features help: +{-d_phys:.4f} AUC."
-    )
     if ci_phys[0] <= -0.005:
         raise RuntimeError(
             "the physics features help in cross-validation: the artifact would need them "
             "(not built: extend FEATURE_NAMES and the service first)"
         )
+    return (
+        f"Physics features do not help: adding the occupant model's P(ISS >= 15) changes the "
+        f"cross-validated AUC by {-d_phys:+.4f} (95 % CI {-ci_phys[1]:+.4f} to "
+        f"{-ci_phys[0]:+.4f}); the field model decides on telematics alone, and the "
+        "occupant models stay in every answer as the physics explanation."
+    )
 
-    police_fig = _police_figures(police, beta, imputation, sex, cfg, cache_dir, workers, progress)
-    coefficients = dict(zip(FEATURE_NAMES, (float(v) for v in beta), strict=True))
+
+def _artifact_document(
+    *,
+    cfg: FitConfig,
+    data: CalibrationDesign,
+    beta: FloatArray,
+    boot: FloatArray,
+    sex: _SexOffset,
+    thresholds: dict[str, dict[FieldMode, float]],
+    op_figures: dict[str, dict[str, Any]],
+    c_final: float,
+    chosen_c: Sequence[float],
+    scores: Sequence[ModelScores],
+    physics_kept: bool,
+) -> dict[str, Any]:
+    """Step 6: the artifact's JSON document, its content checksum inside."""
     doc: dict[str, Any] = {
         "schema": ARTIFACT_SCHEMA,
         "model": {"name": MODEL_NAME, "version": MODEL_VERSION},
@@ -637,7 +675,7 @@ def fit_field(
                 "sex, airbag fitted and deployed"
             ),
         },
-        "imputation": {"age_years": imputation.age_years, "bmi": imputation.bmi},
+        "imputation": {"age_years": data.imputation.age_years, "bmi": data.imputation.bmi},
         "operating_points": {
             name: {
                 "description": _OP_DESCRIPTIONS[name],
@@ -649,11 +687,11 @@ def fit_field(
         "default_operating_point": "sens80",
         "feature_code_sha256": feature_code_sha256(),
         "data": {
-            "calibration_csv_sha256": data_sha,
+            "calibration_csv_sha256": data.sha256,
             "police_csv_sha256": hashlib.sha256(police_data_path().read_bytes()).hexdigest(),
-            "rows": int(y.size),
-            "positives": int(y.sum()),
-            "delta_v_max_kmh": float(max(f.delta_v_kmh for f in inputs)),
+            "rows": int(data.y.size),
+            "positives": int(data.y.sum()),
+            "delta_v_max_kmh": float(max(f.delta_v_kmh for f in data.inputs)),
         },
         "fit": {
             "penalty_c": c_final,
@@ -672,15 +710,80 @@ def fit_field(
         "fit_date": datetime.now(UTC).date().isoformat(),
     }
     doc["content_sha256"] = canonical_content_sha256(doc)
+    return doc
+
+
+def fit_field(
+    config: FitConfig | None = None,
+    *,
+    cache_dir: Path | None = None,
+    workers: int | None = None,
+    progress: bool = True,
+) -> FieldFit:
+    """Fit, cross-validate and describe the field model (see the module docstring).
+
+    Returns
+    -------
+    FieldFit
+        The artifact document (not yet written) and the report's figures.
+    """
+    cfg = config or FitConfig()
+    data = calibration_design()
+    x, y, modes = data.x, data.y, data.modes
+    notes = [row_notification(r) for r in data.rows]
+    evidence = evidence_for(
+        notes,
+        f"mais-{data.sha256[:12]}",
+        cache_dir=cache_dir,
+        workers=workers,
+        progress=progress,
+    )
+    if [ev.inputs for ev in evidence] != list(data.inputs):
+        raise RuntimeError("the engine's field inputs differ from notification_field_inputs")
+    x_phys = np.column_stack([x, _physics_columns(evidence)])
+    p_prev = np.array([ev.p_previous_decision for ev in evidence])
+
+    cv = _cross_validate(x, x_phys, y, modes, cfg, progress)
+    c_final, beta, thresholds = _final_fit(x, y, modes, cv.splits, cfg)
+
+    # bootstrap refits (the service's interval) and the borrowed sex offset
+    police = field_cases(police_data_path())
+    sex = _sex_offset(police, cfg.n_bootstrap, cfg.seed)
+    boot = _bootstrap_refits(x, y, c_final, cfg, progress)
+
+    # figures
+    indices = stratified_bootstrap_indices(y, cfg.n_metric_bootstrap, cfg.seed + 2)
+    oof = cv.oof | {"occupant_models": np.tile(p_prev, (cfg.n_repeats, 1))}
+    scores = _compared_scores(y, modes, oof, indices)
+    op_figures = _operating_point_figures(y, modes, cv.flags, indices, thresholds)
+    verdict = _physics_verdict(scores)
+    physics_kept = False
+
+    police_fig = _police_figures(
+        police, beta, data.imputation, sex, cfg, cache_dir, workers, progress
+    )
+    doc = _artifact_document(
+        cfg=cfg,
+        data=data,
+        beta=beta,
+        boot=boot,
+        sex=sex,
+        thresholds=thresholds,
+        op_figures=op_figures,
+        c_final=c_final,
+        chosen_c=cv.chosen_c,
+        scores=scores,
+        physics_kept=physics_kept,
+    )
     return FieldFit(
         artifact=doc,
         scores=scores,
         operating_points=op_figures,
         police=police_fig,
-        coefficients=coefficients,
+        coefficients=dict(zip(FEATURE_NAMES, (float(v) for v in beta), strict=True)),
         physics_kept=physics_kept,
         physics_verdict=verdict,
-        oof=oof | {"occupant_models": prev},
+        oof=oof,
         y=y,
         modes=modes,
     )

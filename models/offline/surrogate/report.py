@@ -12,6 +12,7 @@ from __future__ import annotations
 import json
 from collections.abc import Mapping
 from pathlib import Path
+from types import ModuleType
 from typing import Any, Final
 
 import numpy as np
@@ -151,35 +152,10 @@ def _fmt(v: float) -> str:
 COVERAGE_CASES = 120
 
 
-def write_report(artifact_dir: Path, out_dir: Path, coverage_cases: int = COVERAGE_CASES) -> Path:
-    """Write ``REPORT.md`` and ``report_*.png`` into `out_dir` from the artifacts.
-
-    Parameters
-    ----------
-    artifact_dir : Path
-    out_dir : Path
-    coverage_cases : int, optional
-        Cases of :func:`coverage_check` (``N_SENSOR_SAMPLES`` LPM runs each; 0 skips it).
-
-    Returns
-    -------
-    Path
-        The report file.
-    """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    lib = SurrogateLibrary.load(artifact_dir, require_all=False)
-    timings: dict[str, Any] = {}
-    tpath = out_dir / "build_timings.json"
-    if tpath.exists():
-        timings = json.loads(tpath.read_text())
-    fams = [lib.families()[s.name] for s in FAMILIES if s.name in lib.family_names]
-    held = {f.name: heldout_metrics(artifact_dir, f) for f in fams}
+def _header(lib: SurrogateLibrary) -> list[str]:
+    """Which library, from which code and parameters, on which design."""
     cfg = lib.manifest.get("config", {})
-    lines = [
+    return [
         "# PCE surrogate build report (issue 5)",
         "",
         f"Library `{lib.name}` version {lib.version}, manifest sha256 `{lib.sha256[:16]}...`; "
@@ -197,7 +173,13 @@ def write_report(artifact_dir: Path, out_dir: Path, coverage_cases: int = COVERA
         "selection rerun in each.",
         "",
     ]
-    lines += [
+
+
+def _design_choices(
+    fams: list[SurrogateFamily], held: Mapping[str, Mapping[str, Any]], cfg: Mapping[str, Any]
+) -> list[str]:
+    """The choices behind the surrogates and the open items of the held-out check."""
+    return [
         "## Design choices",
         "",
         "- Families: frontal x {50M, 5F} x {belted, unbelted} x {airbag, no airbag} (8); near "
@@ -252,13 +234,11 @@ def write_report(artifact_dir: Path, out_dir: Path, coverage_cases: int = COVERA
         "(median absolute error in Table B); the ISS15+ decision uses P(ISS>=15) >= 0.5.",
         "",
     ]
-    if timings:
-        lines += [
-            f"Build time: {timings['total_seconds']:.0f} s with {timings['workers']} worker "
-            f"processes for {len(timings['families'])} families (see benchmarks/RESULTS.md).",
-            "",
-        ]
-    lines += [
+
+
+def _table_a(fams: list[SurrogateFamily]) -> list[str]:
+    """Degree, LOO, terms and sensor-error spread of every output."""
+    lines = [
         "## Table A: degree and LOO per output (median over the delta-V pieces and the "
         "sides of split pieces [min-max])",
         "",
@@ -284,6 +264,15 @@ def write_report(artifact_dir: Path, out_dir: Path, coverage_cases: int = COVERA
         "under the default sensor errors (posture 5 deg, seat track 50 mm at 95%) at "
         f"the nominal crash {NOMINAL} (paper Table 2 analogue).",
         "",
+    ]
+    return lines
+
+
+def _table_b(
+    artifact_dir: Path, fams: list[SurrogateFamily], held: Mapping[str, Mapping[str, Any]]
+) -> list[str]:
+    """Held-out errors and decision agreement against direct LPM runs."""
+    lines = [
         "## Table B: held-out check against direct LPM runs",
         "",
         "Median relative error per measure; P(ISS>=15) and ISS as median absolute error; "
@@ -312,47 +301,52 @@ def write_report(artifact_dir: Path, out_dir: Path, coverage_cases: int = COVERA
         )
     lines += ["", "Pooled over all families:", ""]
     lines += [f"- {k}: {v}" for k, v in _pooled(artifact_dir, fams).items()]
-    if coverage_cases:
-        cov = coverage_check(lib, coverage_cases)
-        hits = sum(c["hit"] for c in cov)
-        open_cases = [c for c in cov if 1e-3 < c["mc"] < 1.0 - 1e-3]
-        open_hits = sum(c["hit"] for c in open_cases)
-        lines += [
-            "",
-            "## Table C: coverage of the P(ISS>=15) interval",
-            "",
-            f"{hits} of {len(cov)} cases ({100 * hits / len(cov):.0f}%) have the Monte Carlo "
-            f"value (mean of {N_SENSOR_SAMPLES} direct LPM runs at the sensor sample points, "
-            "default sensor "
-            "errors around random in-domain readings) inside the served 95% interval "
-            f"(issue 5 target: >= 90%). Cases with a non-saturated Monte Carlo value "
-            f"(0.001 < P < 0.999): {open_hits} of {len(open_cases)}.",
-            "",
-            "The served interval is the bootstrap interval widened on the logit scale by a "
-            "factor calibrated on each family's held-out LPM runs (split-conformal, the 95% "
-            "quantile of |logit P_LPM - logit P_surrogate| over the bootstrap standard "
-            "deviation, over 1.96): the replicates see how the fit moves with the design, not "
-            "the error of the polynomial where the LPM response has kinks (the bare bootstrap "
-            "interval of the former P PCE covered 84% of 73 non-saturated cases of this "
-            "check). Factors: "
-            + "; ".join(f"{f.name} {f.p_interval_inflation:.2f}" for f in fams)
-            + ".",
-            "",
-            "| family | dv, angle, posture, seat, T | P surrogate | 95% interval | P Monte Carlo |"
-            " inside |",
-            "|---|---|---|---|---|---|",
-        ]
-        lines += [
-            f"| {c['family']} | {c['x']} | {c['p']:.4f} | [{c['ci95'][0]:.4f}, "
-            f"{c['ci95'][1]:.4f}] | {c['mc']:.4f} | {'yes' if c['hit'] else 'NO'} |"
-            for c in cov
-        ]
-    if coverage_cases:
-        lines += _measure_coverage_table(lib, artifact_dir, coverage_cases)
-    lines += _split_table(artifact_dir, fams)
-    lines += _kriging_table(artifact_dir, fams)
-    # plots
-    out_dir.mkdir(parents=True, exist_ok=True)
+    return lines
+
+
+def _table_c(lib: SurrogateLibrary, fams: list[SurrogateFamily], coverage_cases: int) -> list[str]:
+    """Coverage of the served P(ISS>=15) interval by Monte Carlo LPM runs."""
+    cov = coverage_check(lib, coverage_cases)
+    hits = sum(c["hit"] for c in cov)
+    open_cases = [c for c in cov if 1e-3 < c["mc"] < 1.0 - 1e-3]
+    open_hits = sum(c["hit"] for c in open_cases)
+    lines = [
+        "",
+        "## Table C: coverage of the P(ISS>=15) interval",
+        "",
+        f"{hits} of {len(cov)} cases ({100 * hits / len(cov):.0f}%) have the Monte Carlo "
+        f"value (mean of {N_SENSOR_SAMPLES} direct LPM runs at the sensor sample points, "
+        "default sensor "
+        "errors around random in-domain readings) inside the served 95% interval "
+        f"(issue 5 target: >= 90%). Cases with a non-saturated Monte Carlo value "
+        f"(0.001 < P < 0.999): {open_hits} of {len(open_cases)}.",
+        "",
+        "The served interval is the bootstrap interval widened on the logit scale by a "
+        "factor calibrated on each family's held-out LPM runs (split-conformal, the 95% "
+        "quantile of |logit P_LPM - logit P_surrogate| over the bootstrap standard "
+        "deviation, over 1.96): the replicates see how the fit moves with the design, not "
+        "the error of the polynomial where the LPM response has kinks (the bare bootstrap "
+        "interval of the former P PCE covered 84% of 73 non-saturated cases of this "
+        "check). Factors: "
+        + "; ".join(f"{f.name} {f.p_interval_inflation:.2f}" for f in fams)
+        + ".",
+        "",
+        "| family | dv, angle, posture, seat, T | P surrogate | 95% interval | P Monte Carlo |"
+        " inside |",
+        "|---|---|---|---|---|---|",
+    ]
+    lines += [
+        f"| {c['family']} | {c['x']} | {c['p']:.4f} | [{c['ci95'][0]:.4f}, "
+        f"{c['ci95'][1]:.4f}] | {c['mc']:.4f} | {'yes' if c['hit'] else 'NO'} |"
+        for c in cov
+    ]
+    return lines
+
+
+def _scatter_plots(
+    plt: ModuleType, artifact_dir: Path, fams: list[SurrogateFamily], out_dir: Path
+) -> list[str]:
+    """One surrogate-vs-LPM scatter per mode; returns the file names."""
     pngs = []
     for mode in ImpactMode:
         mf = [f for f in fams if f.meta["mode"] == mode.value]
@@ -385,7 +379,11 @@ def write_report(artifact_dir: Path, out_dir: Path, coverage_cases: int = COVERA
         fig.savefig(out_dir / name, dpi=110)
         plt.close(fig)
         pngs.append(name)
-    # Figure 8 analogue
+    return pngs
+
+
+def _band_plot(plt: ModuleType, fams: list[SurrogateFamily], out_dir: Path) -> str:
+    """The paper's Figure 8 analogue: P(ISS>=15) against delta-V with its band."""
     fr = [f for f in fams if f.meta["mode"] == "frontal"] or fams
     fig, axes = plt.subplots(1, min(4, len(fr)), figsize=(12, 3), squeeze=False)
     dvs = np.linspace(5.0, 120.0, 93)
@@ -414,7 +412,53 @@ def write_report(artifact_dir: Path, out_dir: Path, coverage_cases: int = COVERA
     fig.tight_layout()
     fig.savefig(out_dir / "report_p_iss15_band.png", dpi=110)
     plt.close(fig)
-    pngs.append("report_p_iss15_band.png")
+    return "report_p_iss15_band.png"
+
+
+def write_report(artifact_dir: Path, out_dir: Path, coverage_cases: int = COVERAGE_CASES) -> Path:
+    """Write ``REPORT.md`` and ``report_*.png`` into `out_dir` from the artifacts.
+
+    Parameters
+    ----------
+    artifact_dir : Path
+    out_dir : Path
+    coverage_cases : int, optional
+        Cases of :func:`coverage_check` (``N_SENSOR_SAMPLES`` LPM runs each; 0 skips it).
+
+    Returns
+    -------
+    Path
+        The report file.
+    """
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    lib = SurrogateLibrary.load(artifact_dir, require_all=False)
+    timings: dict[str, Any] = {}
+    tpath = out_dir / "build_timings.json"
+    if tpath.exists():
+        timings = json.loads(tpath.read_text())
+    fams = [lib.families()[s.name] for s in FAMILIES if s.name in lib.family_names]
+    held = {f.name: heldout_metrics(artifact_dir, f) for f in fams}
+    lines = _header(lib) + _design_choices(fams, held, lib.manifest.get("config", {}))
+    if timings:
+        lines += [
+            f"Build time: {timings['total_seconds']:.0f} s with {timings['workers']} worker "
+            f"processes for {len(timings['families'])} families (see benchmarks/RESULTS.md).",
+            "",
+        ]
+    lines += _table_a(fams)
+    lines += _table_b(artifact_dir, fams, held)
+    if coverage_cases:
+        lines += _table_c(lib, fams, coverage_cases)
+        lines += _measure_coverage_table(lib, artifact_dir, coverage_cases)
+    lines += _split_table(artifact_dir, fams)
+    lines += _kriging_table(artifact_dir, fams)
+    out_dir.mkdir(parents=True, exist_ok=True)
+    pngs = _scatter_plots(plt, artifact_dir, fams, out_dir)
+    pngs.append(_band_plot(plt, fams, out_dir))
     lines += ["", "## Plots", ""] + [f"![{p}]({p})" for p in pngs]
     lines += [
         "",
