@@ -20,6 +20,7 @@ from typing import Any
 import pytest
 from fastapi.testclient import TestClient
 from sqlalchemy import create_engine, text
+from sqlalchemy.pool import NullPool
 
 from service.app import create_app
 from service.auth import Role, create_api_key
@@ -44,11 +45,25 @@ def _database(admin_url: str) -> str:
 
 
 def _set_read_only(admin_url: str, on: bool) -> None:
-    admin = create_engine(admin_url, isolation_level="AUTOCOMMIT")
+    """Make the cluster read-only (or writable) and wait until the reload has taken.
+
+    ``pg_reload_conf()`` only signals the postmaster; a fresh session showing the
+    new value means it has reloaded and signalled the open sessions (the app's
+    pooled ones apply it before their next command).
+    """
+    admin = create_engine(admin_url, isolation_level="AUTOCOMMIT", poolclass=NullPool)
+    value = "on" if on else "off"
     with admin.connect() as conn:
-        value = "on" if on else "off"
         conn.execute(text(f"ALTER SYSTEM SET default_transaction_read_only = {value}"))
         conn.execute(text("SELECT pg_reload_conf()"))
+    deadline = time.monotonic() + 30.0
+    while time.monotonic() < deadline:
+        with admin.connect() as conn:
+            if conn.execute(text("SHOW default_transaction_read_only")).scalar() == value:
+                break
+        time.sleep(0.05)
+    else:
+        raise AssertionError(f"default_transaction_read_only never became {value}")
     admin.dispose()
 
 
