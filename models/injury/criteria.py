@@ -252,16 +252,117 @@ class HicResult:
     t2_s: float
 
 
+#: Relative margin on the pruning bound of :func:`_hic_search`: far above the few
+#: ulps by which the rounded bound and the rounded window value can differ (the
+#: bound then only prunes a little less, never a window that could win).
+_HIC_BOUND_MARGIN: Final[float] = 1e-9
+
+
+@njit(cache=True)
+def _window_max(x: npt.NDArray[np.float64], w: int) -> npt.NDArray[np.float64]:
+    """An upper bound of ``max(x[s : s + w])`` for every start s (van Herk / Gil-Werman).
+
+    Blocks of `w` samples, running maxima from each block's start and from its
+    end: ``max(suffix[s], prefix[s + w - 1])`` is the exact window maximum for
+    a full window and at least it for one cut by the end of `x`.
+    """
+    n = x.shape[0]
+    prefix = np.empty(n)
+    suffix = np.empty(n)
+    for k in range(n):
+        prefix[k] = x[k] if k % w == 0 else max(prefix[k - 1], x[k])
+    for k in range(n - 1, -1, -1):
+        suffix[k] = x[k] if (k == n - 1 or (k + 1) % w == 0) else max(suffix[k + 1], x[k])
+    out = np.empty(n)
+    for s in range(n):
+        out[s] = max(suffix[s], prefix[min(s + w - 1, n - 1)])
+    return out
+
+
+@njit(cache=True)
+def _hic_window_from(
+    cum: npt.NDArray[np.float64], inv_t3: npt.NDArray[np.float64], i: int, nmax: int
+) -> tuple[float, int]:
+    """Largest ``A**5 / T**3`` over the windows starting at sample i, and its end (-1: none)."""
+    ci = cum[i]
+    jmax = min(cum.shape[0] - 1, i + nmax)
+    local = 0.0
+    lj = -1
+    for j in range(i + 1, jmax + 1):
+        area = cum[j] - ci
+        if area > 0.0:
+            a2 = area * area
+            v = a2 * a2 * area * inv_t3[j - i]
+            if v > local:
+                local = v
+                lj = j
+    return local, lj
+
+
 @njit(cache=True)
 def _hic_search(cum: npt.NDArray[np.float64], dt: float, nmax: int) -> tuple[float, int, int]:
-    """Exhaustive HIC search over every sample pair (i, j), 0 < j - i <= nmax.
+    """Exact HIC search over every sample pair (i, j), 0 < j - i <= nmax.
 
     ``cum[k]`` is the integral of the acceleration (g s) from sample 0 to k, and
     ``HIC(i, j) = A**2.5 / T**1.5`` with ``A = cum[j] - cum[i]``, ``T = (j - i) dt``.
     The loop compares the square ``A**5 / T**3`` (products only, no sqrt in the
     inner loop; a monotone transform of HIC for A > 0) and returns HIC squared.
     The first maximum in (i, j) order wins ties.
+
+    Starts that cannot win are skipped, which leaves the answer (value and
+    window) that of the exhaustive loop: ``A**5 / T**3 = A**2 (A / T)**3`` is at
+    most ``B_i = Amax_i**2 rmax_i**3`` for every window from i, with ``Amax_i``
+    the largest area from i within the limit and ``rmax_i`` the largest mean
+    over one sample period there (a mean over T is at most its largest
+    one-period mean). The windows from the start with the largest bound are
+    evaluated first; their best value ``v*`` is reached by a real window, so a
+    start with ``B_i < v*`` (with :data:`_HIC_BOUND_MARGIN`) holds no window
+    that reaches the maximum or ties it. tests/models/injury/test_injury_hic.py
+    holds it equal to the exhaustive loop, bit for bit.
     """
+    n = cum.shape[0]
+    inv_t3 = np.empty(nmax + 1)
+    inv_t3[0] = 0.0
+    for k in range(1, nmax + 1):
+        t = k * dt
+        inv_t3[k] = 1.0 / (t * t * t)
+    # per start i: Amax_i (largest cum[j] - cum[i], j in (i, i + nmax]) and rmax_i
+    # (largest one-period increment cum[k + 1] - cum[k], k in [i, i + nmax))
+    inc = np.empty(n)
+    for k in range(n - 1):
+        inc[k] = cum[k + 1] - cum[k]
+    inc[n - 1] = inc[n - 2] if n > 1 else 0.0
+    cum_max = _window_max(cum, nmax + 1)  # cum[i .. i + nmax]; >= the max over (i, i + nmax]
+    inc_max = _window_max(inc, nmax)
+    bound = np.zeros(n)
+    top = 0
+    for i in range(n - 1):
+        amax = cum_max[i] - cum[i]
+        rmax = inc_max[i]
+        if amax > 0.0 and rmax > 0.0:
+            bound[i] = amax * amax * rmax * rmax * rmax * inv_t3[1] * (1.0 + _HIC_BOUND_MARGIN)
+            if bound[i] > bound[top]:
+                top = i
+    floor, _ = _hic_window_from(cum, inv_t3, top, nmax)
+    best2 = 0.0
+    bi = 0
+    bj = 0
+    for i in range(n - 1):
+        if bound[i] < floor or bound[i] == 0.0:
+            continue
+        local, lj = _hic_window_from(cum, inv_t3, i, nmax)
+        if local > best2:
+            best2 = local
+            bi = i
+            bj = lj
+    return best2, bi, bj
+
+
+@njit(cache=True)
+def _hic_search_exhaustive(
+    cum: npt.NDArray[np.float64], dt: float, nmax: int
+) -> tuple[float, int, int]:
+    """The reference of :func:`_hic_search`: every start evaluated (tests only)."""
     n = cum.shape[0]
     inv_t3 = np.empty(nmax + 1)
     inv_t3[0] = 0.0
@@ -272,18 +373,7 @@ def _hic_search(cum: npt.NDArray[np.float64], dt: float, nmax: int) -> tuple[flo
     bi = 0
     bj = 0
     for i in range(n - 1):
-        ci = cum[i]
-        jmax = min(n - 1, i + nmax)
-        local = 0.0
-        lj = -1
-        for j in range(i + 1, jmax + 1):
-            area = cum[j] - ci
-            if area > 0.0:
-                a2 = area * area
-                v = a2 * a2 * area * inv_t3[j - i]
-                if v > local:
-                    local = v
-                    lj = j
+        local, lj = _hic_window_from(cum, inv_t3, i, nmax)
         if local > best2:
             best2 = local
             bi = i

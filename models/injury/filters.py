@@ -23,11 +23,12 @@ pulse 60.
 from __future__ import annotations
 
 import math
+from functools import lru_cache
 from typing import Final, Literal
 
 import numpy as np
 import numpy.typing as npt
-from scipy.signal import filtfilt
+from scipy.signal import lfilter, lfilter_zi
 
 __all__ = [
     "CFC_CLASSES",
@@ -36,6 +37,7 @@ __all__ = [
     "SAE_J211_DESIGN_FACTOR",
     "cfc_coefficients",
     "cfc_filter",
+    "forward_backward",
 ]
 
 #: Channel frequency classes accepted by :func:`cfc_filter`.
@@ -116,6 +118,57 @@ def cfc_coefficients(
     b1 = -2.0 * (wa * wa - 1.0) / den
     b2 = (-1.0 + _SQRT2 * wa - wa * wa) / den
     return (a0, 2.0 * a0, a0), (1.0, -b1, -b2)
+
+
+@lru_cache(maxsize=64)
+def _steady_state(
+    b: tuple[float, float, float], a: tuple[float, float, float]
+) -> npt.NDArray[np.float64]:
+    """``scipy.signal.lfilter_zi(b, a)``, once per coefficient set (read-only).
+
+    The step response's steady state solves a small linear system; the request
+    path filters a handful of channels per occupant with one of four classes at
+    one rate, so solving it once per class saves that solve on every call.
+    """
+    zi = np.asarray(lfilter_zi(b, a), dtype=np.float64)
+    zi.flags.writeable = False
+    return zi
+
+
+def forward_backward(
+    b: tuple[float, float, float],
+    a: tuple[float, float, float],
+    x: npt.NDArray[np.float64],
+    axis: int = -1,
+) -> npt.NDArray[np.float64]:
+    """The recursion run forward then backward along `axis`, no padding.
+
+    The operations of ``scipy.signal.filtfilt(b, a, x, axis=axis, padlen=0)``
+    (its ``method="pad"`` path: each pass started from the steady state of a
+    step at its first sample), the same bits (tests/models/injury/test_injury_filters.py),
+    with the steady state computed once per coefficient set (:func:`_steady_state`).
+
+    Parameters
+    ----------
+    b, a : tuple of float, length 3
+        :func:`cfc_coefficients`.
+    x : ndarray
+        Signal(s), already padded.
+    axis : int, optional
+
+    Returns
+    -------
+    ndarray, same shape as `x`
+    """
+    zi = _steady_state(b, a)
+    shape = [1] * x.ndim
+    shape[axis] = zi.size
+    zi = zi.reshape(shape)
+    first = np.take(x, [0], axis=axis)
+    y, _ = lfilter(b, a, x, axis=axis, zi=zi * first)
+    last = np.take(y, [-1], axis=axis)
+    y, _ = lfilter(b, a, np.flip(y, axis=axis), axis=axis, zi=zi * last)
+    return np.asarray(np.flip(y, axis=axis), dtype=np.float64)
 
 
 def _pad(x: npt.NDArray[np.float64], width: int) -> npt.NDArray[np.float64]:
@@ -205,5 +258,5 @@ def cfc_filter(
     pad_s = max(PAD_DURATION_S, _PAD_DESIGN_PERIODS / (cfc * factor))
     width = max(1, math.ceil(pad_s * sample_rate_hz))
     padded = _pad(x, width)
-    y = filtfilt(b, a, padded, padlen=0)
+    y = forward_backward(b, a, padded)
     return np.ascontiguousarray(y[width : width + x.size], dtype=np.float64)

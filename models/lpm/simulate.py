@@ -31,7 +31,6 @@ from typing import Any, Final
 
 import numpy as np
 import numpy.typing as npt
-from scipy.signal import filtfilt
 
 from models.arrays import FloatArray
 from models.constants import G_MS2
@@ -51,6 +50,7 @@ from models.injury.filters import (
     PAD_DURATION_S,
     SAE_J211_DESIGN_FACTOR,
     cfc_coefficients,
+    forward_backward,
 )
 from models.lpm import kernel as K
 from models.lpm.assemble import Model, Restraints, build_model
@@ -397,7 +397,7 @@ def _filtered_stack(rows: Sequence[FloatArray], fs: float, cfc: int) -> FloatArr
         ),
         axis=1,
     )
-    y = filtfilt(b, a, padded, axis=1, padlen=0)
+    y = forward_backward(b, a, padded, axis=1)
     return np.ascontiguousarray(y[:, width : width + n], dtype=np.float64)
 
 

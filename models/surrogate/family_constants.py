@@ -58,10 +58,14 @@ _FITTED_SD_FLOOR: Final[Mapping[str, float]] = MappingProxyType({"iss": 0.1})
 _FITTED_SD_FLOOR_MEASURE: Final[float] = 0.01
 
 
+def _sd_floor(name: str) -> float:
+    """Floor of the replicates' standard deviation of output `name` (fitted scale)."""
+    return _FITTED_SD_FLOOR.get(name, _FITTED_SD_FLOOR_MEASURE)
+
+
 def _bootstrap_sd(replicates: FloatArray, name: str) -> FloatArray:
     """Standard deviation over the last axis (the replicates), floored for `name`."""
-    floor = _FITTED_SD_FLOOR.get(name, _FITTED_SD_FLOOR_MEASURE)
-    return np.maximum(np.std(replicates, axis=-1, ddof=1), floor)
+    return np.maximum(np.std(replicates, axis=-1, ddof=1), _sd_floor(name))
 
 
 def _sensor_normals(n: int) -> FloatArray:

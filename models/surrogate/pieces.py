@@ -333,6 +333,9 @@ class _SplitPiece:
         fixed, up, us = basis
         for side, w in ((self._contact, wc), (self._free, 1.0 - wc)):
             cols = np.flatnonzero(w > 0.0)
+            if cols.size == post.size and np.all(w == 1.0):
+                # one side only: 0.0 + 1.0 * x == x (the fitted values are never -0.0)
+                return side.samples(xc, post, seat, basis)
             if cols.size == post.size:
                 out += w * side.samples(xc, post, seat, basis)
             elif cols.size:

@@ -6,13 +6,14 @@ import math
 
 import numpy as np
 import pytest
-from scipy.signal import freqz
+from scipy.signal import filtfilt, freqz
 
 from models.injury.filters import (
     ISO_6487_DESIGN_FACTOR,
     SAE_J211_DESIGN_FACTOR,
     cfc_coefficients,
     cfc_filter,
+    forward_backward,
 )
 
 CLASSES = (60, 180, 600, 1000)
@@ -129,3 +130,21 @@ def test_invalid_arguments_name_the_argument(args: tuple[object, ...], name: str
 def test_unknown_standard() -> None:
     with pytest.raises(ValueError, match="`standard`"):
         cfc_filter([1.0, 2.0], 10_000.0, 60, standard="din")  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize(
+    ("cfc", "fs"),
+    [(c, f) for c in CLASSES for f in (2_000.0, 10_000.0, 20_000.0) if 2 * c * 2.0775 < f],
+)
+def test_forward_backward_is_scipy_filtfilt_bit_for_bit(cfc: int, fs: float) -> None:
+    """The cached steady state changes no bit against scipy's own filtfilt (1-D and rows)."""
+    b, a = cfc_coefficients(fs, cfc)
+    rng = np.random.default_rng(cfc + int(fs))
+    rows = rng.normal(size=(3, 1500)).cumsum(axis=1)
+    assert np.array_equal(
+        forward_backward(b, a, rows, axis=1), filtfilt(b, a, rows, axis=1, padlen=0)
+    )
+    assert np.array_equal(forward_backward(b, a, rows[1]), filtfilt(b, a, rows[1], padlen=0))
+    assert np.array_equal(
+        forward_backward(b, a, rows.T, axis=0), filtfilt(b, a, rows.T, axis=0, padlen=0)
+    )

@@ -10,7 +10,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 
-from models.injury.criteria import HicResult, hic
+from models.injury.criteria import HicResult, _hic_search, _hic_search_exhaustive, hic
 
 
 def _brute_force_hic(a: np.ndarray, fs: float, max_window_ms: float) -> float:
@@ -162,3 +162,41 @@ def test_properties_scaling_and_window_monotonicity(a: np.ndarray, k: float) -> 
     assert hic(a, fs, 36.0).value >= h15 * (1 - 1e-12)
     assert h15 >= 0.0
     assert math.isfinite(h15)
+
+
+def _cum(a: np.ndarray, dt: float) -> np.ndarray:
+    cum = np.empty(a.size)
+    cum[0] = 0.0
+    np.cumsum(0.5 * (a[1:] + a[:-1]) * dt, out=cum[1:])
+    return cum
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_pruned_search_is_the_exhaustive_search_bit_for_bit(seed: int) -> None:
+    """Skipping starts that cannot win changes neither the value nor the window."""
+    rng = np.random.default_rng(seed)
+    t = np.arange(2500)
+    shapes = [
+        rng.normal(size=t.size),  # ringing around zero
+        np.abs(rng.normal(size=t.size)) * 50.0,  # all positive, no clear peak
+        80.0 * np.exp(-0.5 * ((t - rng.uniform(0, 2500)) / rng.uniform(5, 300)) ** 2)
+        + rng.normal(scale=2.0, size=t.size),  # a head pulse with noise
+        np.where(t % 600 < 40, 90.0, -5.0),  # equal rectangular pulses: ties
+        np.full(t.size, -1.0),  # no positive window
+        np.zeros(t.size),
+    ]
+    for a in shapes:
+        for nmax in (1, 2, 150, 360, 2499):
+            cum = _cum(a, 1e-4)
+            assert _hic_search(cum, 1e-4, nmax) == _hic_search_exhaustive(cum, 1e-4, nmax)
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    a=arrays(np.float64, st.integers(2, 400), elements=st.floats(-200.0, 400.0)),
+    nmax=st.integers(1, 120),
+)
+def test_pruned_search_equals_exhaustive_on_any_signal(a: np.ndarray, nmax: int) -> None:
+    cum = _cum(a, 1e-3)
+    n = min(nmax, a.size - 1)
+    assert _hic_search(cum, 1e-3, n) == _hic_search_exhaustive(cum, 1e-3, n)
