@@ -437,9 +437,22 @@ def _fit_haversine(t: FloatArray, a: FloatArray, delta_v_kmh: float) -> Haversin
     def residual(p: FloatArray) -> FloatArray:
         return haversine(t, float(p[0]), float(p[1])) - a
 
+    def jacobian(p: FloatArray) -> FloatArray:
+        # d/dA and d/dT of A sin^2(pi t / T) on [0, T] (0 outside): sin^2(pi t / T)
+        # and -A (pi t / T^2) sin(2 pi t / T). [R] exact derivatives instead of
+        # scipy's two extra residuals per step: about half the fit time
+        amp, dur = float(p[0]), float(p[1])
+        inside = (t >= 0.0) & (t <= dur)
+        phase = np.pi * t / dur
+        jac = np.empty((t.size, 2))
+        jac[:, 0] = np.where(inside, np.sin(phase) ** 2, 0.0)
+        jac[:, 1] = np.where(inside, -amp * phase / dur * np.sin(2.0 * phase), 0.0)
+        return jac
+
     sol = least_squares(
         residual,
         x0=np.array([peak, t_guess]),
+        jac=jacobian,
         bounds=(np.array([0.0, t_lo]), np.array([np.inf, t_hi])),
         x_scale=np.array([max(peak, 1.0), max(t_guess, step)]),
         method="trf",

@@ -65,13 +65,16 @@ from models.impact_mode import ImpactMode
 from models.injury.batch import region_cumulative_risk_batch
 from models.injury.measures import InjuryMeasures
 from models.injury.scores import (
+    _NO_RISK,
+    AIS_LEVEL_THRESHOLD,
     ISS_REGIONS,
     ISS_TRIAGE_THRESHOLD,
     MAX_AIS,
-    ais_distribution_from_cumulative,
-    ais_level,
+    _ais_level,
+    _distribution_from_cumulative,
+    _iss_distribution,
+    _p_iss_at_least,
     iss,
-    p_iss_at_least,
 )
 from models.notification import Body
 
@@ -202,11 +205,17 @@ def assess(
     (0, 0.0)
     """
     cumulative = region_cumulative_risk(measures, body, age_years, impact_mode)
-    probability = {r: ais_distribution_from_cumulative(c) for r, c in cumulative.items()}
-    levels = {r: ais_level(p) for r, p in probability.items()}
+    # the curves' combination is non-increasing in the level and within [0, 1]
+    # (region_cumulative_risk_batch), so the checks of the public score functions
+    # are skipped here: the same arithmetic, a third of the time
+    probability = {r: _distribution_from_cumulative(c) for r, c in cumulative.items()}
+    levels = {
+        r: 0 if p == _NO_RISK else _ais_level(np.asarray(p), AIS_LEVEL_THRESHOLD)
+        for r, p in probability.items()
+    }
     return InjuryAssessment(
         region_ais_probability=probability,
         region_ais=levels,
         iss=iss(levels),
-        p_iss15=p_iss_at_least(probability, ISS_TRIAGE_THRESHOLD),
+        p_iss15=_p_iss_at_least(_iss_distribution(probability), float(ISS_TRIAGE_THRESHOLD)),
     )

@@ -164,10 +164,19 @@ def iss_distribution(
     dict of int to float
         P(ISS = s) for every reachable s.
     """
-    states: dict[tuple[int, int, int], float] = {(0, 0, 0): 1.0}
+    checked = {}
     for name, probs in region_probabilities.items():
         _check_region(name)
-        p = _as_distribution(name, probs)
+        checked[name] = _as_distribution(name, probs)
+    return _iss_distribution(checked)
+
+
+def _iss_distribution(
+    region_probabilities: Mapping[str, Sequence[float] | npt.NDArray[np.float64]],
+) -> dict[int, float]:
+    """:func:`iss_distribution` of distributions already checked (the same numbers)."""
+    states: dict[tuple[int, int, int], float] = {(0, 0, 0): 1.0}
+    for p in region_probabilities.values():
         support = [(k, float(p[k])) for k in range(MAX_AIS + 1) if p[k] > 0.0]
         new: dict[tuple[int, int, int], float] = {}
         for top, q in states.items():
@@ -204,8 +213,12 @@ def p_iss_at_least(
     t = float(threshold)
     if not math.isfinite(t):
         raise ValueError("`threshold` must be finite.")
-    dist = iss_distribution(region_probabilities)
-    total = math.fsum(q for s, q in dist.items() if s >= t)
+    return _p_iss_at_least(iss_distribution(region_probabilities), t)
+
+
+def _p_iss_at_least(dist: Mapping[int, float], threshold: float) -> float:
+    """P(ISS >= threshold) of an ISS distribution (:func:`iss_distribution`)."""
+    total = math.fsum(q for s, q in dist.items() if s >= threshold)
     return min(max(total, 0.0), 1.0)
 
 
@@ -231,6 +244,18 @@ def ais_distribution_from_cumulative(
         raise ValueError("`cumulative` must be finite and in [0, 1].")
     if np.any(np.diff(c) > 1e-12):
         raise ValueError("`cumulative` must be non-increasing in n.")
+    return _distribution_from_cumulative(c)
+
+
+#: P(AIS = 0..6) of a region without risk (every P(AIS >= n) zero): what
+#: :func:`_distribution_from_cumulative` gives for it, exactly.
+_NO_RISK: Final[tuple[float, ...]] = (1.0,) + (0.0,) * MAX_AIS
+
+
+def _distribution_from_cumulative(c: npt.NDArray[np.float64]) -> tuple[float, ...]:
+    """:func:`ais_distribution_from_cumulative` of a checked shape (6,) array."""
+    if not c.any():
+        return _NO_RISK
     full = np.concatenate(([1.0], c, [0.0]))
     p = np.maximum(full[:-1] - full[1:], 0.0)
     p = p / p.sum()
@@ -259,7 +284,11 @@ def ais_level(
     """
     if not 0.0 < threshold <= 1.0:
         raise ValueError("`threshold` must be in (0, 1].")
-    p = _as_distribution("<distribution>", distribution)
+    return _ais_level(_as_distribution("<distribution>", distribution), threshold)
+
+
+def _ais_level(p: npt.NDArray[np.float64], threshold: float) -> int:
+    """:func:`ais_level` of a checked distribution."""
     # P(AIS >= n) for n = 0..6; a small tolerance absorbs rounding at exactly 0.5.
     tail = np.cumsum(p[::-1])[::-1]
     hits = np.nonzero(tail >= threshold - 1e-12)[0]

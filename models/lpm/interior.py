@@ -26,8 +26,11 @@ class); a number is a value in SI units with its source in the entry's
 
 from __future__ import annotations
 
+import threading
+import weakref
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
+from types import MappingProxyType
 from typing import Any, Final
 
 from models.lpm.params import ParameterError, ParameterSet
@@ -153,6 +156,14 @@ def _points(
     return out
 
 
+#: Resolved planes per parameter-set object: ``id(ps) -> (weak reference, {key: plane})``.
+#: The table is resolved once per parameter set, plane, body, link lengths and
+#: conditions (a handful of combinations) instead of on every simulation; the
+#: weak reference tells a live set from a new one that reuses a freed id.
+_RESOLVED: dict[int, tuple[weakref.ref[ParameterSet], dict[Any, Any]]] = {}
+_RESOLVED_LOCK = threading.Lock()
+
+
 def interior_plane(
     ps: ParameterSet,
     plane: str,
@@ -161,6 +172,9 @@ def interior_plane(
     conditions: Sequence[str],
 ) -> tuple[dict[str, BodyPoint], list[ContactRow]]:
     """The body points and contacts of one model plane, resolved for one occupant.
+
+    Memoised per parameter-set object (:data:`_RESOLVED`); the rows are
+    immutable, and the containers returned are fresh copies.
 
     Parameters
     ----------
@@ -185,11 +199,40 @@ def interior_plane(
     ParameterError
         A plane missing from the table, an unknown point, condition or key.
     """
+    lengths = tuple(link_length(k) for k in _LINKED_BODIES)
+    key = (plane, body, lengths, tuple(conditions))
+    with _RESOLVED_LOCK:
+        entry = _RESOLVED.get(id(ps))
+        if entry is None or entry[0]() is not ps:
+            for stale in [k for k, (ref, _) in _RESOLVED.items() if ref() is None]:
+                del _RESOLVED[stale]
+            entry = (weakref.ref(ps), {})
+            _RESOLVED[id(ps)] = entry
+        hit = entry[1].get(key)
+    if hit is None:
+        hit = _resolve_plane(ps, plane, body, lengths, tuple(conditions))
+        with _RESOLVED_LOCK:
+            entry[1][key] = hit
+    return dict(hit[0]), list(hit[1])
+
+
+#: Bodies whose link length a ``p_link_fraction`` may refer to (kernel numbering:
+#: pelvis, lumbar, thorax, neck, head).
+_LINKED_BODIES: Final[tuple[int, ...]] = (0, 1, 2, 3, 4)
+
+
+def _resolve_plane(
+    ps: ParameterSet,
+    plane: str,
+    body: str,
+    lengths: tuple[float, ...],
+    conditions: tuple[str, ...],
+) -> tuple[dict[str, BodyPoint], list[ContactRow]]:
     try:
         table = ps.interior[plane]
     except KeyError:
         raise ParameterError(f"the parameter set has no interior for the {plane} plane") from None
-    points = _points(table["points"], ps, body, link_length)
+    points = _points(table["points"], ps, body, lambda k: lengths[k])
     rows = []
     for entry in table["contacts"]:
         name = str(entry["name"])
@@ -210,7 +253,7 @@ def interior_plane(
                 surface=str(entry["surface"]),
                 motion=entry.get("motion"),
                 channel=int(entry["channel"]) if "channel" in entry else None,
-                law=law,
+                law=MappingProxyType(law),
                 enabled=when is None or when in conditions,
                 hysteresis=(
                     resolve_value(entry["hysteresis"], ps, body, f"contact {name}.hysteresis")

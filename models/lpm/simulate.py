@@ -24,7 +24,8 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Mapping, Sequence
+import threading
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from types import MappingProxyType
 from typing import Any, Final
@@ -429,6 +430,67 @@ def _positions(m: Model, ys: FloatArray) -> dict[str, FloatArray]:
     }
 
 
+def _measure_channels(pr: Prepared, ys: FloatArray, diags: FloatArray) -> dict[str, FloatArray]:
+    """The histories :func:`_measures` reads, computed as :func:`_histories` computes them."""
+    m = pr.model
+    nc = m.ct.shape[0]
+    nb = m.bt.shape[0]
+    h: dict[str, FloatArray] = {}
+    h["head_accel_x_g"] = diags[:, K.D_HEAD_AX] / G0
+    h["head_accel_z_g"] = diags[:, K.D_HEAD_AZ] / G0
+    h["chest_accel_x_g"] = diags[:, K.D_CHEST_AX] / G0
+    h["chest_accel_z_g"] = diags[:, K.D_CHEST_AZ] / G0
+    h["neck_fx_n"] = diags[:, K.D_NECK_FX]
+    h["neck_fz_n"] = diags[:, K.D_NECK_FZ]
+    h["neck_my_nm"] = diags[:, K.D_NECK_MY]
+    h["chest_deflection_mm"] = ys[:, 5] * 1000.0
+    for c, name in enumerate(m.contact_names):
+        if name in _ABDOMEN_CONTACTS:
+            h[f"penetration_{name}_m"] = diags[:, K.DIAG_FIXED + nc + nb + c]
+    return h
+
+
+#: Contacts whose penetration history is a side-mode abdominal measure (:func:`_measures`).
+_ABDOMEN_CONTACTS: Final[frozenset[str]] = frozenset({"door_abdomen", "console_abdomen"})
+
+
+class _LazyHistories(Mapping[str, FloatArray]):
+    """:func:`_histories` of a run, computed on first access (read-only arrays).
+
+    The triage reads only the measures' channels (:func:`_measure_channels`);
+    the full set (positions, energies, every contact's force, gap and crush)
+    is for plots, checks and the offline tools, which pay for it when they
+    read it. The values are those :func:`_histories` gives, bit for bit.
+    """
+
+    __slots__ = ("_args", "_done", "_lock")
+
+    def __init__(self, pr: Prepared, t: FloatArray, ys: FloatArray, diags: FloatArray) -> None:
+        self._args: tuple[Prepared, FloatArray, FloatArray, FloatArray] | None = (pr, t, ys, diags)
+        self._done: Mapping[str, FloatArray] | None = None
+        self._lock = threading.Lock()
+
+    def _all(self) -> Mapping[str, FloatArray]:
+        done = self._done
+        if done is None:
+            with self._lock:
+                if self._done is None:
+                    assert self._args is not None
+                    self._done = MappingProxyType(_histories(*self._args))
+                    self._args = None
+                done = self._done
+        return done
+
+    def __getitem__(self, key: str) -> FloatArray:
+        return self._all()[key]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._all())
+
+    def __len__(self) -> int:
+        return len(self._all())
+
+
 def _histories(
     pr: Prepared, t: FloatArray, ys: FloatArray, diags: FloatArray
 ) -> dict[str, FloatArray]:
@@ -530,11 +592,10 @@ def _result(
     status: int,
     extra: Mapping[str, Any] | None = None,
 ) -> LpmResult:
-    h = _histories(pr, t, ys, diags)
     if status == 0 and pr.padded:
         status = 1
     if status >= 0:
-        measures = _measures(pr, t, h)
+        measures = _measures(pr, t, _measure_channels(pr, ys, diags))
         assessment: InjuryAssessment | None = assess(
             measures, pr.occupant.body, pr.occupant.age_years, pr.mode.value
         )
@@ -558,7 +619,7 @@ def _result(
         measures,
         assessment,
         t,
-        MappingProxyType(h),
+        _LazyHistories(pr, t, ys, diags),
         status,
         STATUS_MESSAGES[status],
         MappingProxyType(info),
