@@ -24,6 +24,7 @@ from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from service import __version__, cases_service
 from service.api import cases, health, pages
+from service.balance import ConnectionBalance, WorkerLoads
 from service.context import ServiceContext, engine_models_for
 from service.db import migrate
 from service.db.session import make_engine, make_sessionmaker
@@ -264,6 +265,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     """
     settings = settings or get_settings()
     metrics = Metrics()
+    # with several worker processes: their shared table of requests in flight
+    loads = WorkerLoads(settings.worker_loads_path) if settings.worker_loads_path else None
 
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[dict[str, Any]]:
@@ -295,9 +298,13 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         )
         app.state.replayer = replayer
         replayer.start()
+        if loads is not None:
+            loads.claim()  # counted among the workers once it serves
         try:
             yield {}
         finally:
+            if loads is not None:
+                loads.close()
             replayer.stop()
             db_engine.dispose()
 
@@ -327,6 +334,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.middleware("http")(metrics_middleware(metrics))
     app.add_middleware(BodySizeLimit, max_bytes=settings.max_body_bytes)
     app.add_middleware(ResponseHeaders)
+    if loads is not None:
+        app.add_middleware(ConnectionBalance, loads=loads)
     app.include_router(health.router)
     app.include_router(cases.router)
     app.include_router(pages.router)

@@ -21,7 +21,9 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import shutil
 import sys
+import tempfile
 from collections.abc import Sequence
 from datetime import UTC, datetime
 from pathlib import Path
@@ -50,9 +52,8 @@ def _settings() -> Any:
 def _cmd_serve(args: argparse.Namespace) -> int:
     """Serve HTTP with N worker processes (uvicorn's supervisor), each warmed before it
     accepts connections; SIGTERM lets in-flight requests finish, then exits."""
-    import uvicorn
 
-    from service.logs import configure_logging, log_config
+    from service.logs import configure_logging
 
     settings = _settings()
     host = args.host or settings.host
@@ -63,12 +64,30 @@ def _cmd_serve(args: argparse.Namespace) -> int:
         from service.db import migrate
 
         migrate.upgrade(settings.database_url)
+    loads_dir = None
     if workers > 1:
         # compile the kernels into the shared numba cache once, so that every worker
         # loads them instead of compiling them side by side
         from models.lpm.simulate import warm_up
+        from service.balance import LOADS_ENV, WorkerLoads
 
         warm_up()
+        # the workers' shared table of requests in flight (service.balance)
+        loads_dir = tempfile.mkdtemp(prefix="aacn-serve-")
+        os.environ[LOADS_ENV] = str(WorkerLoads.create(Path(loads_dir) / "loads"))
+    try:
+        _run_uvicorn(host, port, workers, settings)
+    finally:
+        if loads_dir is not None:
+            shutil.rmtree(loads_dir, ignore_errors=True)
+    return 0
+
+
+def _run_uvicorn(host: str, port: int, workers: int, settings: Any) -> None:
+    import uvicorn
+
+    from service.logs import log_config
+
     uvicorn.run(
         "service.app:create_app",
         factory=True,
@@ -81,7 +100,6 @@ def _cmd_serve(args: argparse.Namespace) -> int:
         server_header=False,
         timeout_graceful_shutdown=settings.shutdown_timeout_s,
     )
-    return 0
 
 
 def _cmd_db(args: argparse.Namespace) -> int:

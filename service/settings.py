@@ -104,6 +104,12 @@ class Settings(BaseSettings):
     workers: int | None = Field(
         default=None, ge=1, description="Worker processes of `serve`; None: the CPU count."
     )
+    worker_loads_path: Path | None = Field(
+        default=None,
+        description="Set by `serve --workers N` (N > 1) for its workers, not by hand: the "
+        "shared table of requests in flight per worker, by which a crowded worker asks "
+        "clients to reconnect (`service.balance`).",
+    )
     shutdown_timeout_s: float = Field(
         default=30.0,
         gt=0.0,

@@ -13,6 +13,7 @@ from typing import Any
 
 import numpy as np
 import numpy.typing as npt
+from threadpoolctl import threadpool_limits  # type: ignore[import-untyped]
 
 from models.arrays import FloatArray, IntArray
 from models.impact_mode import ImpactMode
@@ -164,9 +165,15 @@ class SurrogateFamily:
         if "heldout_x" in arrays and "heldout_y" in arrays:
             hx = np.asarray(arrays["heldout_x"], dtype=np.float64)
             hy = np.asarray(arrays["heldout_y"], dtype=np.float64)
-            raw = self._raw_all(hx)  # once for both calibrations
-            inflation = self._p_inflation(hx, hy[:, outputs.index("p_iss15")], raw=raw)
-            factors = self._interval_factors(hx, hy, raw=raw)
+            # one BLAS thread, whatever the caller's setting: OpenBLAS splits these
+            # products (hundreds of held-out runs) by thread count, which moved the
+            # factors in the last bits, and with them the intervals of every answer
+            # (tests/service/test_determinism.py: a process that loaded the models
+            # before capping its threads answered differently from one that did not)
+            with threadpool_limits(limits=1, user_api="blas"):
+                raw = self._raw_all(hx)  # once for both calibrations
+                inflation = self._p_inflation(hx, hy[:, outputs.index("p_iss15")], raw=raw)
+                factors = self._interval_factors(hx, hy, raw=raw)
         sa(self, "p_interval_inflation", inflation)
         sa(self, "interval_factors", MappingProxyType(factors))
         return self
@@ -525,7 +532,7 @@ class SurrogateFamily:
         iss_ci = (0.0, 0.0)
         # the replicates' spread at the reading, every output in one call (the same
         # bits as one call per output: pairwise sums over the same 150 values)
-        sds = np.std(np.ascontiguousarray(raw[:, 1:, 0]), axis=1, ddof=1)
+        sds = np.std(raw[:, 1:, 0], axis=1, ddof=1)
         for k, name in enumerate(self._fitted):
             # the surrogate's own error (held-out calibrated 95% bound m at the
             # reading) added in quadrature to each side of the sensor x bootstrap

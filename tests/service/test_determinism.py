@@ -6,7 +6,7 @@ stored figures within a tolerance. On one machine, with one build of the
 libraries, the answer must not depend on anything else: the service's result JSON
 (everything but the per-step timings) is the same bytes when the notification is
 evaluated twice in one process, and in two fresh processes with different hash
-seeds (set and dict iteration orders).
+seeds (set and dict iteration orders) and BLAS thread counts.
 """
 
 from __future__ import annotations
@@ -82,8 +82,10 @@ def test_same_notification_in_two_processes_gives_the_same_bytes(models: EngineM
     texts = _notifications()
     stdin = "".join(t + "\n" for t in texts)
     procs = []
+    # other hash seeds, and other BLAS thread counts while the models load (the
+    # surrogates' calibration runs matrix products at load: they must not depend on it)
     for seed in ("1", "2"):
-        env = {**os.environ, "PYTHONHASHSEED": seed}
+        env = {**os.environ, "PYTHONHASHSEED": seed, "OPENBLAS_NUM_THREADS": seed}
         env["PYTHONPATH"] = os.pathsep.join(filter(None, [str(ROOT), env.get("PYTHONPATH")]))
         procs.append(
             subprocess.Popen(
