@@ -20,6 +20,7 @@ J. Comput. Phys. 230:2345): ``(sum_j a_j^q)^(1/q) <= degree``.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import numpy as np
@@ -31,6 +32,7 @@ __all__ = [
     "Recurrence",
     "design_matrix",
     "evaluate_univariate",
+    "evaluate_univariate_at",
     "graded_counts",
     "hyperbolic_multi_indices",
     "stieltjes",
@@ -117,15 +119,37 @@ def evaluate_univariate(x: npt.ArrayLike, rec: Recurrence, degree: int) -> Float
     """
     xv = np.asarray(x, dtype=np.float64).ravel()
     alpha, beta = rec
-    out = np.empty((xv.size, degree + 1))
-    out[:, 0] = 1.0
+    # built degree by degree as contiguous rows, returned as (n, degree + 1): the same
+    # arithmetic as column by column (IEEE operations, the square roots correctly
+    # rounded in math and numpy alike), without strided temporaries
+    sq = [math.sqrt(float(b)) for b in beta[: degree + 1]]
+    rows = np.empty((degree + 1, xv.size))
+    rows[0] = 1.0
     if degree >= 1:
-        out[:, 1] = (xv - alpha[0]) / np.sqrt(beta[1])
+        rows[1] = (xv - alpha[0]) / sq[1]
     for k in range(1, degree):
-        out[:, k + 1] = ((xv - alpha[k]) * out[:, k] - np.sqrt(beta[k]) * out[:, k - 1]) / np.sqrt(
-            beta[k + 1]
+        rows[k + 1] = ((xv - alpha[k]) * rows[k] - sq[k] * rows[k - 1]) / sq[k + 1]
+    return np.ascontiguousarray(rows.T)
+
+
+def evaluate_univariate_at(x: float, rec: Recurrence, degree: int) -> FloatArray:
+    """:func:`evaluate_univariate` at one point, shape (degree + 1,), the same numbers.
+
+    In Python floats (IEEE double, as numpy's element-wise operations): a request
+    evaluates three inputs at one point each, where numpy's per-call overhead on
+    one-element arrays would cost tens of microseconds.
+    """
+    alpha, beta = rec
+    z = float(x)
+    out = [1.0]
+    if degree >= 1:
+        out.append((z - float(alpha[0])) / math.sqrt(float(beta[1])))
+    for k in range(1, degree):
+        out.append(
+            ((z - float(alpha[k])) * out[k] - math.sqrt(float(beta[k])) * out[k - 1])
+            / math.sqrt(float(beta[k + 1]))
         )
-    return out
+    return np.array(out, dtype=np.float64)
 
 
 def hyperbolic_multi_indices(

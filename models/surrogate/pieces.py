@@ -16,7 +16,7 @@ import numpy.typing as npt
 from scipy.sparse import csr_array
 
 from models.arrays import FloatArray, IntArray
-from models.surrogate.basis import design_matrix, evaluate_univariate
+from models.surrogate.basis import design_matrix, evaluate_univariate, evaluate_univariate_at
 from models.surrogate.family_constants import _POSTURE, _SEAT
 from models.surrogate.kriging import ResidualKriging
 from models.surrogate.spec import (
@@ -182,9 +182,7 @@ class _Piece:
         """
         z = to_unit(xc, self._ranges)[0]
         md = self._maxdeg
-        fixed = tuple(
-            evaluate_univariate(z[j : j + 1], self._recs[j], md)[0] for j in _FIXED_INPUTS
-        )
+        fixed = tuple(evaluate_univariate_at(float(z[j]), self._recs[j], md) for j in _FIXED_INPUTS)
         zp = 2.0 * (post - self._lo[_POSTURE]) / (self._hi[_POSTURE] - self._lo[_POSTURE]) - 1.0
         zs = 2.0 * (seat - self._lo[_SEAT]) / (self._hi[_SEAT] - self._lo[_SEAT]) - 1.0
         up = evaluate_univariate(zp, self._recs[_POSTURE], md)
