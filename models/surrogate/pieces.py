@@ -404,7 +404,9 @@ class _KrigedPiece:
         pts = np.repeat(xc, post.size, axis=0)
         pts[:, _POSTURE] = post
         pts[:, _SEAT] = seat
-        return self.base.samples(xc, post, seat) + self.correction(pts).T[:, None, :]
+        out = self.base.samples(xc, post, seat)  # a fresh array: corrected in place
+        out += self.correction(pts).T[:, None, :]
+        return out
 
 
 def _piece(
