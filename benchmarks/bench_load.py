@@ -1,24 +1,30 @@
-"""Load benchmark: real `aacn-triage serve` processes under concurrent POSTs, and batch rates.
+"""Load benchmark: the engine and the batch before and after issue 24, and served load.
 
-Run: ``python benchmarks/bench_load.py [--seconds S] [--connections C] [--batch N]``.
-Prints the figures and rewrites the "Load" section of ``benchmarks/RESULTS.md``.
+Run: ``python benchmarks/bench_load.py [--seconds S] [--connections C] [--batch N]
+[--before REV]``. Prints the figures and rewrites the "Load" section of
+``benchmarks/RESULTS.md``.
+
+Before / after, same machine, same run: the tree of ``--before`` (default
+:data:`BEFORE`, the main on which issue 24 measured the engine at 12.5 ms and the
+batch at 66/s) is exported with ``git archive`` next to this checkout, and both
+are timed in fresh processes (their own numba caches, one BLAS thread each),
+alternated twice:
+
+* Engine: ``models.triage.triage`` in process on a single-occupant summary
+  notification, the two-occupant EDR example and the single-occupant
+  acceleration example (median and p95 of the calls);
+* Batch: ``triage --batch`` on N notifications (the documented examples at varied
+  delta-V and PDOF), wall time including process start and model load, each tree
+  with its own defaults: the old tree in one process (it has no ``--workers``),
+  this one with ``--workers 1`` and ``--workers 2``.
 
 HTTP: the installed console script serves on a loopback port with ``--workers 1``,
-then ``--workers 2`` (same machine, same run), on a fresh SQLite file each. A
-closed loop of C connections (keep-alive, stdlib ``http.client``, one thread each)
-POSTs the two-occupant EDR example with a fresh event id for S seconds; every
-answer must be 201 (anything else counts as an error). Unloaded latency: one
-connection, 100 requests. The load generator runs on the same two cores as the
-servers, so the figures are what this box can do, not the service alone.
-
-Engine: `models.triage.triage` in this process on a single-occupant summary
-notification and on the two-occupant EDR example, with OpenBLAS's default thread
-count (before issue 24) and capped at one thread (what the service now does,
-`service.context.limit_blas_threads`), side by side, interleaved in one run.
-
-Batch: ``aacn-triage triage --batch`` on N notifications (the documented examples
-at varied delta-V and PDOF), wall time including process start and model load,
-with ``--workers 1`` and ``--workers 2``.
+then ``--workers 2`` (same run), on a fresh SQLite file each. A closed loop of C
+connections (keep-alive, stdlib ``http.client``, one thread each) POSTs the
+two-occupant EDR example with a fresh event id for S seconds; every answer must
+be 201 (anything else counts as an error). Unloaded latency: one connection, 100
+requests. The load generator runs on the same two cores as the servers, so the
+figures are what this box can do, not the service alone.
 """
 
 from __future__ import annotations
@@ -48,6 +54,45 @@ sys.path.insert(0, str(ROOT))
 
 #: Requests answered before timing starts (connection set-up, first-call costs).
 WARM_REQUESTS = 10
+
+#: The main on which issue 24 was measured (engine 12.5 ms per single-occupant
+#: notification, ``triage --batch`` 66/s): the "before" of the side-by-side runs.
+BEFORE = "7e01712"
+
+#: Engine timing in a fresh process of one tree (PYTHONPATH): JSON of ms per call.
+_ENGINE_SCRIPT = """
+import copy, json, sys, time
+from threadpoolctl import threadpool_limits
+from models.triage import load_engine_models, triage
+from service.schemas import EXAMPLE_NOTIFICATIONS, CrashNotificationIn
+repeats = int(sys.argv[1])
+one = copy.deepcopy(EXAMPLE_NOTIFICATIONS["summary"]["value"])
+one["occupants"] = one["occupants"][:1]
+cases = {
+    "summary, 1 occupant": one,
+    "EDR delta-V, 2 occupants": EXAMPLE_NOTIFICATIONS["delta_v"]["value"],
+    "acceleration, 1 occupant": EXAMPLE_NOTIFICATIONS["acceleration"]["value"],
+}
+models = load_engine_models()
+out = {}
+with threadpool_limits(limits=1, user_api="blas"):
+    for name, body in cases.items():
+        engine = CrashNotificationIn.model_validate(body).to_engine()
+        engine = engine[0] if isinstance(engine, tuple) else engine
+        occupants = len(engine.occupants)
+        for _ in range(5):
+            triage(engine, models)
+        ms = []
+        for _ in range(repeats):
+            t0 = time.perf_counter()
+            triage(engine, models)
+            ms.append(1000.0 * (time.perf_counter() - t0))
+        out[name] = {"occupants": occupants, "ms": ms}
+print(json.dumps(out))
+"""
+
+#: ``aacn-triage`` of one tree (PYTHONPATH), for the old tree without its console script.
+_CLI = "import sys; from service.cli import main; sys.exit(main(sys.argv[1:]))"
 
 
 def _pct(ms: list[float], q: float) -> float:
@@ -177,11 +222,70 @@ def _batch_input(path: Path, n: int) -> None:
     path.write_text("\n".join(lines) + "\n")
 
 
-def _batch(exe: str, src: Path, tmp: Path, workers: int, n: int) -> float:
-    out = tmp / f"batch-{workers}.jsonl"
+def _export(rev: str, dest: Path) -> Path:
+    """The tree of `rev` (this repository's history) exported into `dest`."""
+    dest.mkdir(parents=True)
+    archive = subprocess.run(
+        ["git", "-C", str(ROOT), "archive", rev], check=True, capture_output=True
+    ).stdout
+    subprocess.run(["tar", "-x", "-C", str(dest)], input=archive, check=True)
+    return dest
+
+
+def _tree_env(tree: Path, cache: Path, one_blas_thread: bool = True) -> dict[str, str]:
+    """Environment of a process running `tree`'s code, with its own numba cache.
+
+    With `one_blas_thread`, OpenBLAS gets one thread (the engine comparison: the
+    code alone); without, the tree runs with its own defaults (the old main let
+    OpenBLAS start a thread per core, which issue 24 capped).
+    """
+    env = {
+        **os.environ,
+        "PYTHONPATH": str(tree),
+        "NUMBA_CACHE_DIR": str(cache),
+        "AACN_NUMBA_CACHE_DIR": str(cache),
+    }
+    env.pop("OPENBLAS_NUM_THREADS", None)
+    if one_blas_thread:
+        env["OPENBLAS_NUM_THREADS"] = "1"
+    return env
+
+
+def _engine_before_after(trees: dict[str, Path], tmp: Path, repeats: int = 40) -> list[tuple]:
+    """Median and p95 ms per notification and per occupant, each tree, alternated twice."""
+    samples: dict[tuple[str, str], list[float]] = {}
+    occupants: dict[str, int] = {}
+    for _round in range(2):
+        for label, tree in trees.items():
+            out = subprocess.run(
+                [sys.executable, "-c", _ENGINE_SCRIPT, str(repeats)],
+                env=_tree_env(tree, tmp / f"numba-{label}"),
+                cwd=tree,
+                capture_output=True,
+                text=True,
+                check=True,
+            ).stdout
+            for name, rec in json.loads(out.strip().splitlines()[-1]).items():
+                samples.setdefault((name, label), []).extend(rec["ms"])
+                occupants[name] = rec["occupants"]
+    rows = []
+    for (name, label), ms in samples.items():
+        med = statistics.median(ms)
+        rows.append((name, label, med, _pct(ms, 0.95), med / occupants[name]))
+    return rows
+
+
+def _batch(tree: Path, tmp: Path, src: Path, label: str, workers: int | None, n: int) -> float:
+    """Notifications per second of ``triage --batch`` (wall time with start-up)."""
+    out = tmp / f"batch-{label}-{workers}.jsonl"
+    argv = ["triage", "--batch", str(src), "--out", str(out)]
+    if workers is not None:
+        argv += ["--workers", str(workers)]
     t0 = time.perf_counter()
     subprocess.run(
-        [exe, "triage", "--batch", str(src), "--out", str(out), "--workers", str(workers)],
+        [sys.executable, "-c", _CLI, *argv],
+        env=_tree_env(tree, tmp / f"numba-{label}", one_blas_thread=False),
+        cwd=tree,
         check=True,
         capture_output=True,
     )
@@ -190,45 +294,14 @@ def _batch(exe: str, src: Path, tmp: Path, workers: int, n: int) -> float:
     return n / elapsed
 
 
-def _engine_side_by_side(repeats: int = 40) -> list[tuple[str, str, float, float]]:
-    """Median and p95 ms per notification, BLAS threads default vs 1, interleaved."""
-    from threadpoolctl import threadpool_info, threadpool_limits
-
-    from models.triage import load_engine_models, triage
-    from service.schemas import EXAMPLE_NOTIFICATIONS, CrashNotificationIn
-
-    models = load_engine_models()
-    default = max(
-        (i["num_threads"] for i in threadpool_info() if i["user_api"] == "blas"), default=1
-    )
-    one = copy.deepcopy(EXAMPLE_NOTIFICATIONS["summary"]["value"])
-    one["occupants"] = one["occupants"][:1]
-    cases = {
-        "summary, 1 occupant": one,
-        "EDR delta-V, 2 occupants": EXAMPLE_NOTIFICATIONS["delta_v"]["value"],
-    }
-    rows = []
-    for name, body in cases.items():
-        engine_input, _ = CrashNotificationIn.model_validate(body).to_engine()
-        samples: dict[int, list[float]] = {default: [], 1: []}
-        for i in range(repeats + 3):
-            for threads in (default, 1):
-                with threadpool_limits(limits=threads, user_api="blas"):
-                    t0 = time.perf_counter()
-                    triage(engine_input, models)
-                    if i >= 3:
-                        samples[threads].append(1000.0 * (time.perf_counter() - t0))
-        for threads, label in ((default, f"{default} (before)"), (1, "1 (now)")):
-            ms = samples[threads]
-            rows.append((name, label, statistics.median(ms), _pct(ms, 0.95)))
-    return rows
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--seconds", type=float, default=20.0, help="load duration per run")
     parser.add_argument("--connections", type=int, default=8, help="concurrent connections")
-    parser.add_argument("--batch", type=int, default=1000, help="notifications in the batch")
+    parser.add_argument(
+        "--batch", type=int, default=9713, help="notifications in the batch (the issue's 9,713)"
+    )
+    parser.add_argument("--before", default=BEFORE, help="git revision of the 'before' runs")
     parser.add_argument("--no-write", action="store_true", help="print only")
     args = parser.parse_args()
 
@@ -239,11 +312,19 @@ def main() -> None:
         raise SystemExit("install the package first: pip install -e .")
     template = EXAMPLE_NOTIFICATIONS["delta_v"]["value"]
     assert len(template["occupants"]) == 2
-    engine_rows = _engine_side_by_side()
     rows = []
     unloaded: dict[str, float] = {}
     with tempfile.TemporaryDirectory() as tmp_name:
         tmp = Path(tmp_name)
+        trees = {"before": _export(args.before, tmp / "before"), "now": ROOT}
+        engine_rows = _engine_before_after(trees, tmp)
+        src = tmp / "batch.jsonl"
+        _batch_input(src, args.batch)
+        batch = {
+            "before": _batch(trees["before"], tmp, src, "before", None, args.batch),
+            "now 1": _batch(ROOT, tmp, src, "now", 1, args.batch),
+            "now 2": _batch(ROOT, tmp, src, "now", 2, args.batch),
+        }
         for workers in (1, 2):
             server = _Server(exe, tmp, workers)
             try:
@@ -254,28 +335,45 @@ def main() -> None:
                 rows.append((workers, _load(server, template, args.connections, args.seconds)))
             finally:
                 server.stop()
-        src = tmp / "batch.jsonl"
-        _batch_input(src, args.batch)
-        batch = {w: _batch(exe, src, tmp, w, args.batch) for w in (1, 2)}
 
     one, two = rows[0][1], rows[1][1]
     now = datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC")
     load = os.getloadavg()
+    label = {"before": f"before (`{args.before}`)", "now": "now"}
     lines = [
         "## Load",
         "",
         f"`python benchmarks/bench_load.py` ({now}, {platform.machine()}, {os.cpu_count()} "
         f"CPUs, Python {platform.python_version()}; load average {load[0]:.1f}, {load[1]:.1f}, "
         f"{load[2]:.1f}: other sessions share the machine; the load generator runs on the same "
-        "cores). Real `aacn-triage serve` on a SQLite file, `POST /v1/cases` with the "
+        f"cores). Before: the tree of `{args.before}` (the main issue 24 measured), exported "
+        "and run side by side with this one in fresh processes, one BLAS thread each, "
+        "alternated twice.",
+        "",
+        "Engine per notification in process (`models.triage.triage`; median and p95 of 80 "
+        "calls each):",
+        "",
+        "| notification | code | median (ms) | p95 (ms) | median per occupant (ms) |",
+        "|---|---|---:|---:|---:|",
+        *(
+            f"| {n} | {label[c]} | {a:.1f} | {b:.1f} | {p:.1f} |"
+            for n, c, a, b, p in sorted(engine_rows, key=lambda r: (r[0], r[1] != "before"))
+        ),
+        "",
+        f"`triage --batch`, {args.batch} notifications (the documented examples at varied "
+        "delta-V and PDOF; wall time with start-up and model load; each tree with its own "
+        "defaults, so before with OpenBLAS's thread per core):",
+        "",
+        "| code | processes | notifications/s | ratio to before |",
+        "|---|---:|---:|---:|",
+        f"| {label['before']} | 1 (no `--workers`) | {batch['before']:.0f} | 1.00 |",
+        f"| now | `--workers 1` | {batch['now 1']:.0f} | {batch['now 1'] / batch['before']:.2f} |",
+        f"| now | `--workers 2` | {batch['now 2']:.0f} | {batch['now 2'] / batch['before']:.2f} |",
+        "",
+        "Target (issue 24): `--workers 2` at 3x the rate before.",
+        "",
+        "HTTP: real `aacn-triage serve` on a SQLite file, `POST /v1/cases` with the "
         "two-occupant EDR example, a fresh event each (engine and commit every time).",
-        "",
-        "Engine per notification in process (median and p95 of 40 calls each, the two "
-        "settings interleaved):",
-        "",
-        "| notification | BLAS threads | median (ms) | p95 (ms) |",
-        "|---|---|---:|---:|",
-        *(f"| {n} | {t} | {a:.1f} | {b:.1f} |" for n, t, a, b in engine_rows),
         "",
         f"Unloaded, one connection, 100 requests, `--workers 1`: p50 {unloaded['p50']:.1f} ms, "
         f"p99 {unloaded['p99']:.1f} ms.",
@@ -293,11 +391,7 @@ def main() -> None:
     lines += [
         "",
         f"Throughput ratio, 2 workers / 1: {two['rps'] / one['rps']:.2f} (target >= 2, with "
-        "p99 <= 250 ms).",
-        "",
-        f"`triage --batch`, {args.batch} notifications (wall time with start-up and model "
-        f"load): {batch[1]:.0f}/s with `--workers 1`, {batch[2]:.0f}/s with `--workers 2` "
-        f"(ratio {batch[2] / batch[1]:.2f}; the issue's figure on main: 66/s).",
+        f"p99 <= 250 ms: p99 {two['p99']:.0f} ms).",
     ]
     text = "\n".join(lines)
     print(text)
