@@ -29,7 +29,6 @@ from typing import Final, Literal
 import numpy as np
 import numpy.typing as npt
 from numba import njit
-from scipy.signal import lfilter_zi
 
 __all__ = [
     "CFC_CLASSES",
@@ -125,13 +124,19 @@ def cfc_coefficients(
 def _steady_state(
     b: tuple[float, float, float], a: tuple[float, float, float]
 ) -> npt.NDArray[np.float64]:
-    """``scipy.signal.lfilter_zi(b, a)``, once per coefficient set (read-only).
+    """The state of the recursion at rest after a unit step (read-only), shape (2,).
 
-    The step response's steady state solves a small linear system; the request
-    path filters a handful of channels per occupant with one of four classes at
-    one rate, so solving it once per class saves that solve on every call.
+    ``scipy.signal.lfilter_zi(b, a)`` for three coefficients with ``a[0] == 1``,
+    the same operations: ``(I - C^T) zi = b[1:] - a[1:] b[0]`` with ``C`` the
+    companion matrix of ``a``, solved by LAPACK (tests/models/injury/
+    test_injury_filters.py holds it equal, bit for bit). Written out because
+    importing ``scipy.signal`` took 0.45 s of every process start (measured
+    2026-12-04), for this one small system; solved once per coefficient set.
     """
-    zi = np.asarray(lfilter_zi(b, a), dtype=np.float64)
+    a1, a2 = float(a[1]), float(a[2])
+    i_minus_ct = np.array([[1.0 - (-a1), 0.0 - 1.0], [0.0 - (-a2), 1.0 - 0.0]])
+    rhs = np.array([b[1] - a1 * b[0], b[2] - a2 * b[0]], dtype=np.float64)
+    zi = np.asarray(np.linalg.solve(i_minus_ct, rhs), dtype=np.float64)
     zi.flags.writeable = False
     return zi
 

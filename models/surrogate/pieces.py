@@ -106,13 +106,6 @@ class _Piece:
             raise ValueError(f"{prefix}: outputs differ in bootstrap size")
         nb = n_boot.pop()
         used = np.unique(np.concatenate([p[0] for p in point] + [b[1] for b in boots]))
-        col = np.full(cand.shape[0], -1, dtype=np.int64)
-        col[used] = np.arange(used.size)
-        coef = np.zeros((len(outputs), nb + 1, used.size))
-        for k, ((pt, pc), (off, bt, bc)) in enumerate(zip(point, boots, strict=True)):
-            coef[k, 0, col[pt]] = pc
-            rows = np.repeat(np.arange(1, nb + 1), np.diff(off))
-            coef[k, rows, col[bt]] = bc
         terms = cand[used]
         # group the terms by their (posture, seat track) degrees: the sensor
         # samples only vary those two inputs; terms sorted by group, and the
@@ -123,7 +116,16 @@ class _Piece:
         sk = key[order]
         starts = np.flatnonzero(np.concatenate([[True], sk[1:] != sk[:-1]]))
         pairs = np.ascontiguousarray(terms[starts][:, [_POSTURE, _SEAT]])
-        coef_t = np.ascontiguousarray(coef[:, :, order].reshape(-1, used.size).T)
+        # each candidate term's row in the sorted order; the coefficients are
+        # scattered straight into (terms, outputs x replicates), column k (B + 1) + r
+        # for output k and replicate r (0: the point PCE)
+        row = np.full(cand.shape[0], -1, dtype=np.int64)
+        row[used[order]] = np.arange(used.size)
+        coef_t = np.zeros((used.size, len(outputs) * (nb + 1)))
+        for k, ((pt, pc), (off, bt, bc)) in enumerate(zip(point, boots, strict=True)):
+            coef_t[row[pt], k * (nb + 1)] = pc
+            reps = np.repeat(np.arange(1, nb + 1), np.diff(off))
+            coef_t[row[bt], k * (nb + 1) + reps] = bc
         for arr in (coef_t, terms, starts, pairs, alpha, beta, rr):
             arr.flags.writeable = False
         sa = object.__setattr__

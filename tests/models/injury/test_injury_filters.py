@@ -6,11 +6,12 @@ import math
 
 import numpy as np
 import pytest
-from scipy.signal import filtfilt, freqz
+from scipy.signal import filtfilt, freqz, lfilter_zi
 
 from models.injury.filters import (
     ISO_6487_DESIGN_FACTOR,
     SAE_J211_DESIGN_FACTOR,
+    _steady_state,
     cfc_coefficients,
     cfc_filter,
     forward_backward,
@@ -148,3 +149,13 @@ def test_forward_backward_is_scipy_filtfilt_bit_for_bit(cfc: int, fs: float) -> 
     assert np.array_equal(
         forward_backward(b, a, rows.T, axis=0), filtfilt(b, a, rows.T, axis=0, padlen=0)
     )
+
+
+@pytest.mark.parametrize("fs", [1_000.0, 2_000.0, 10_000.0, 20_000.0, 12_345.0])
+@pytest.mark.parametrize("standard", ["sae_j211", "iso_6487"])
+def test_steady_state_is_scipy_lfilter_zi_bit_for_bit(fs: float, standard: str) -> None:
+    for cfc in CLASSES:
+        if 2 * cfc * 2.0833 >= fs:
+            continue  # above the rate's Nyquist limit
+        b, a = cfc_coefficients(fs, cfc, standard=standard)  # type: ignore[arg-type]
+        assert np.array_equal(_steady_state(b, a), lfilter_zi(b, a))
