@@ -566,35 +566,71 @@ def nij(
     if not (fx.shape == fz.shape == my.shape):
         raise ValueError("`fx_n`, `fz_n` and `my_nm` must have the same shape.")
     ic = NIJ_INTERCEPTS[body] if intercepts is None else intercepts
-    moc = my - ic.condyle_offset_m * fx
-    tension = fz >= 0.0
-    flexion = moc >= 0.0
-    n_force = np.where(tension, fz / ic.tension_n, -fz / ic.compression_n)
-    n_moment = np.where(flexion, moc / ic.flexion_nm, -moc / ic.extension_nm)
-    series = n_force + n_moment
-    peaks: dict[NijMode, float] = {}
-    for mode, mask in (
-        (NijMode.NTE, tension & ~flexion),
-        (NijMode.NTF, tension & flexion),
-        (NijMode.NCE, ~tension & ~flexion),
-        (NijMode.NCF, ~tension & flexion),
-    ):
-        peaks[mode] = float(series[mask].max()) if mask.any() else 0.0
-    k = int(np.argmax(series))
-    mode_k = (
-        (NijMode.NTF if flexion[k] else NijMode.NTE)
-        if tension[k]
-        else (NijMode.NCF if flexion[k] else NijMode.NCE)
+    value, k, mode_k, peaks = _nij_scan(
+        fx,
+        fz,
+        my,
+        ic.condyle_offset_m,
+        ic.tension_n,
+        ic.compression_n,
+        ic.flexion_nm,
+        ic.extension_nm,
     )
     return NijResult(
-        value=float(series[k]),
-        mode=mode_k,
-        time_index=k,
-        nte=peaks[NijMode.NTE],
-        ntf=peaks[NijMode.NTF],
-        nce=peaks[NijMode.NCE],
-        ncf=peaks[NijMode.NCF],
+        value=float(value),
+        mode=_NIJ_MODES[mode_k],
+        time_index=int(k),
+        nte=float(peaks[0]),
+        ntf=float(peaks[1]),
+        nce=float(peaks[2]),
+        ncf=float(peaks[3]),
     )
+
+
+#: Load cases in the order of :func:`_nij_scan`'s peaks.
+_NIJ_MODES: Final[tuple[NijMode, ...]] = (NijMode.NTE, NijMode.NTF, NijMode.NCE, NijMode.NCF)
+
+
+@njit(cache=True)
+def _nij_scan(
+    fx: npt.NDArray[np.float64],
+    fz: npt.NDArray[np.float64],
+    my: npt.NDArray[np.float64],
+    offset_m: float,
+    tension_n: float,
+    compression_n: float,
+    flexion_nm: float,
+    extension_nm: float,
+) -> tuple[float, int, int, npt.NDArray[np.float64]]:
+    """Nij over the samples in one pass: its maximum, where, in which load case, and
+    each load case's peak (0 where the case never occurs).
+
+    Per sample the operations of the array form ``MOCy = My - offset Fx``,
+    ``Fz / Fzc`` or ``-Fz / Fzc``, ``MOCy / Myc`` or ``-MOCy / Myc``, their sum
+    (the same bits, IEEE operations without fast-math); the first maximum wins,
+    as ``np.argmax``. Load cases: 0 NTE, 1 NTF, 2 NCE, 3 NCF.
+    """
+    peaks = np.zeros(4)
+    seen = np.zeros(4, dtype=np.bool_)
+    best = -np.inf
+    best_i = 0
+    best_mode = 0
+    for i in range(fx.shape[0]):
+        moc = my[i] - offset_m * fx[i]
+        tension = fz[i] >= 0.0
+        flexion = moc >= 0.0
+        n_force = fz[i] / tension_n if tension else -fz[i] / compression_n
+        n_moment = moc / flexion_nm if flexion else -moc / extension_nm
+        v = n_force + n_moment
+        mode = (1 if flexion else 0) if tension else (3 if flexion else 2)
+        if not seen[mode] or v > peaks[mode]:
+            peaks[mode] = v
+            seen[mode] = True
+        if v > best:
+            best = v
+            best_i = i
+            best_mode = mode
+    return best, best_i, best_mode, peaks
 
 
 # --------------------------------------------------------------------------------------

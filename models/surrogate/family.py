@@ -491,12 +491,21 @@ class SurrogateFamily:
         # P(ISS >= 15) from the measures: the point PCEs at every sensor sample,
         # the replicates at the subset (control variate: each replicate's
         # deviation from the point PCEs on the same subset)
-        rm = raw[self._meas_rows]
+        mr = self._meas_rows
         n_s = N_SENSOR_SAMPLES
         # one pass through the risk curves for both sets (each set's P is its own:
-        # the batch is elementwise), [point PCE at every sample | replicates at the subset]
+        # the batch is elementwise), [point PCE at every sample | replicates at the
+        # subset], gathered straight from `raw` (no copy of all of its measure rows)
         both = np.concatenate(
-            (rm[:, 0, 1:], rm[:, 1:, 1 + _P_SUBSET].reshape(rm.shape[0], -1)), axis=1
+            (
+                raw[mr, 0, 1:],
+                raw[
+                    mr[:, None, None],
+                    np.arange(1, nb1)[None, :, None],
+                    (1 + _P_SUBSET)[None, None, :],
+                ].reshape(mr.size, -1),
+            ),
+            axis=1,
         )
         p_both = self._p_from_raw(both, age_years)
         p_point = p_both[:n_s]  # (n,)

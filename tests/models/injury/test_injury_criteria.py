@@ -220,3 +220,32 @@ def test_results_are_frozen() -> None:
     r = chest_deflection([1.0, 2.0], M50)
     with pytest.raises(dataclasses.FrozenInstanceError):
         r.peak_mm = 3.0  # type: ignore[misc]
+
+
+def _nij_arrays(fx: np.ndarray, fz: np.ndarray, my: np.ndarray, body: Body) -> tuple:
+    """Nij in array form (the formula as first written): the reference of the one-pass scan."""
+    ic = NIJ_INTERCEPTS[body]
+    moc = my - ic.condyle_offset_m * fx
+    tension = fz >= 0.0
+    flexion = moc >= 0.0
+    series = np.where(tension, fz / ic.tension_n, -fz / ic.compression_n) + np.where(
+        flexion, moc / ic.flexion_nm, -moc / ic.extension_nm
+    )
+    masks = (tension & ~flexion, tension & flexion, ~tension & ~flexion, ~tension & flexion)
+    peaks = tuple(float(series[m].max()) if m.any() else 0.0 for m in masks)
+    k = int(np.argmax(series))
+    return float(series[k]), k, peaks
+
+
+@pytest.mark.parametrize("seed", range(5))
+@pytest.mark.parametrize("body", list(Body))
+def test_nij_one_pass_is_the_array_formula_bit_for_bit(seed: int, body: Body) -> None:
+    rng = np.random.default_rng(seed)
+    n = 2500
+    fx, fz, my = (rng.normal(scale=s, size=n).cumsum() for s in (40.0, 120.0, 4.0))
+    if seed == 0:
+        fz = np.abs(fz)  # tension only: the compression cases never occur
+    value, k, peaks = _nij_arrays(fx, fz, my, body)
+    r = nij(fx, fz, my, body)
+    assert (r.value, r.time_index) == (value, k)
+    assert (r.nte, r.ntf, r.nce, r.ncf) == peaks
