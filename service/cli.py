@@ -51,8 +51,8 @@ def _settings() -> Any:
 
 def _cmd_serve(args: argparse.Namespace) -> int:
     """Serve HTTP with N worker processes (uvicorn's supervisor), each warmed before it
-    accepts connections; SIGTERM lets in-flight requests finish, then exits."""
-
+    accepts connections; SIGTERM lets in-flight requests finish, then exits. With more
+    than one worker they share a table of requests in flight (`service.balance`)."""
     from service.logs import configure_logging
 
     settings = _settings()
