@@ -280,6 +280,17 @@ def _window_max(x: npt.NDArray[np.float64], w: int) -> npt.NDArray[np.float64]:
 
 
 @njit(cache=True)
+def _inv_cubes(dt: float, nmax: int) -> npt.NDArray[np.float64]:
+    """``1 / T**3`` for window lengths ``T = k dt``, k = 0..nmax (0 for k = 0), 1/s^3."""
+    inv_t3 = np.empty(nmax + 1)
+    inv_t3[0] = 0.0
+    for k in range(1, nmax + 1):
+        t = k * dt
+        inv_t3[k] = 1.0 / (t * t * t)
+    return inv_t3
+
+
+@njit(cache=True)
 def _hic_window_from(
     cum: npt.NDArray[np.float64], inv_t3: npt.NDArray[np.float64], i: int, nmax: int
 ) -> tuple[float, int]:
@@ -321,11 +332,7 @@ def _hic_search(cum: npt.NDArray[np.float64], dt: float, nmax: int) -> tuple[flo
     holds it equal to the exhaustive loop, bit for bit.
     """
     n = cum.shape[0]
-    inv_t3 = np.empty(nmax + 1)
-    inv_t3[0] = 0.0
-    for k in range(1, nmax + 1):
-        t = k * dt
-        inv_t3[k] = 1.0 / (t * t * t)
+    inv_t3 = _inv_cubes(dt, nmax)
     # per start i: Amax_i (largest cum[j] - cum[i], j in (i, i + nmax]) and rmax_i
     # (largest one-period increment cum[k + 1] - cum[k], k in [i, i + nmax))
     inc = np.empty(n)
@@ -364,11 +371,7 @@ def _hic_search_exhaustive(
 ) -> tuple[float, int, int]:
     """The reference of :func:`_hic_search`: every start evaluated (tests only)."""
     n = cum.shape[0]
-    inv_t3 = np.empty(nmax + 1)
-    inv_t3[0] = 0.0
-    for k in range(1, nmax + 1):
-        t = k * dt
-        inv_t3[k] = 1.0 / (t * t * t)
+    inv_t3 = _inv_cubes(dt, nmax)
     best2 = 0.0
     bi = 0
     bj = 0

@@ -159,28 +159,33 @@ def _forward_backward_rows(
     """
     m, n = x.shape
     out = np.empty_like(x)
-    b0, b1, b2 = b[0], b[1], b[2]
-    a1, a2 = a[1], a[2]
     for r in range(m):
-        x0 = x[r, 0]
-        z0 = zi[0] * x0
-        z1 = zi[1] * x0
-        for k in range(n):
-            xn = x[r, k]
-            yn = z0 + b0 * xn
-            z0 = z1 + xn * b1 - yn * a1
-            z1 = xn * b2 - yn * a2
-            out[r, k] = yn
-        y0 = out[r, n - 1]
-        z0 = zi[0] * y0
-        z1 = zi[1] * y0
-        for k in range(n - 1, -1, -1):
-            xn = out[r, k]
-            yn = z0 + b0 * xn
-            z0 = z1 + xn * b1 - yn * a1
-            z1 = xn * b2 - yn * a2
-            out[r, k] = yn
+        _one_pass(x[r], out[r], b, a, zi, 0, n, 1)  # forward
+        _one_pass(out[r], out[r], b, a, zi, n - 1, -1, -1)  # backward, in place
     return out
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _one_pass(
+    x: npt.NDArray[np.float64],
+    y: npt.NDArray[np.float64],
+    b: npt.NDArray[np.float64],
+    a: npt.NDArray[np.float64],
+    zi: npt.NDArray[np.float64],
+    start: int,
+    stop: int,
+    step: int,
+) -> None:
+    """One pass of the recursion over ``x[start:stop:step]`` into `y` (may be `x`)."""
+    x0 = x[start]
+    z0 = zi[0] * x0
+    z1 = zi[1] * x0
+    for k in range(start, stop, step):
+        xn = x[k]
+        yn = z0 + b[0] * xn
+        z0 = z1 + xn * b[1] - yn * a[1]
+        z1 = xn * b[2] - yn * a[2]
+        y[k] = yn
 
 
 def forward_backward(

@@ -466,6 +466,40 @@ class SurrogateFamily:
             for n, a, b in zip(INPUT_NAMES, x, xc, strict=True)
             if abs(a - b) > 1e-9 * (1.0 + abs(a))
         )
+        raw = self._sensor_outputs(xc, posture_sd_deg, seat_track_sd_mm)
+        p, p_ci = self._p_and_interval(raw, age_years)
+        points, cis = self._output_intervals(raw)
+        iss, iss_ci = points.pop("iss", 0.0), cis.pop("iss", (0.0, 0.0))
+        return UncertaintyResult(
+            p_iss15=p,
+            p_iss15_ci95=p_ci,
+            iss=iss,
+            iss_ci95=iss_ci,
+            measures=MappingProxyType(points),
+            measures_ci95=MappingProxyType(cis),
+            n_samples=N_SENSOR_SAMPLES,
+            n_bootstrap=int(raw.shape[1]) - 1,
+            clamped_inputs=clamped,
+            p_interval_inflation=self.p_interval_inflation,
+        )
+
+    def _sensor_outputs(
+        self, xc: FloatArray, posture_sd_deg: float, seat_track_sd_mm: float
+    ) -> FloatArray:
+        """Fitted-scale outputs at the reading and its sensor samples, blended over the pieces.
+
+        Parameters
+        ----------
+        xc : ndarray, shape (5,)
+            Inputs clamped to the domain (:data:`INPUT_NAMES`).
+        posture_sd_deg, seat_track_sd_mm : float
+            Sensor standard deviations, deg and mm.
+
+        Returns
+        -------
+        ndarray, shape (n_fitted, B + 1, N_SENSOR_SAMPLES + 1)
+            Rows of :attr:`_fitted`; replicate 0 the point PCE; sample 0 the reading.
+        """
         # sensor samples, clipped to the domain; row 0 is the reading itself
         post = np.empty(N_SENSOR_SAMPLES + 1)
         seat = np.empty(N_SENSOR_SAMPLES + 1)
@@ -484,13 +518,20 @@ class SurrogateFamily:
             else w[i] * self._pieces[int(i)].samples(xc[None, :], post, seat)
             for i in np.flatnonzero(w > 0.0)
         ]
-        raw: FloatArray = parts[0] if len(parts) == 1 else parts[0] + parts[1]
-        measures: dict[str, float] = {}
-        cis: dict[str, tuple[float, float]] = {}
-        n_out, nb1 = int(raw.shape[0]), int(raw.shape[1])
-        # P(ISS >= 15) from the measures: the point PCEs at every sensor sample,
-        # the replicates at the subset (control variate: each replicate's
-        # deviation from the point PCEs on the same subset)
+        return parts[0] if len(parts) == 1 else parts[0] + parts[1]
+
+    def _p_and_interval(
+        self, raw: FloatArray, age_years: float | None
+    ) -> tuple[float, tuple[float, float]]:
+        """P(ISS >= 15) over the sensor spread and its 95% interval over the replicates.
+
+        The point PCEs give P at every sensor sample (their mean is the
+        estimate); the replicates at the subset :data:`_P_SUBSET` (control
+        variate: each replicate's deviation from the point PCEs on the same
+        subset). The interval is widened about its centre on the logit scale by
+        the held-out calibration factor (the surrogate's own error).
+        """
+        nb1 = int(raw.shape[1])
         mr = self._meas_rows
         n_s = N_SENSOR_SAMPLES
         # one pass through the risk curves for both sets (each set's P is its own:
@@ -513,9 +554,30 @@ class SurrogateFamily:
         p_sub[0] = p_point[_P_SUBSET]
         p_sub[1:] = p_both[n_s:].reshape(nb1 - 1, _P_SUBSET.size)
         sub_means = p_sub.mean(axis=1)
-        # 95% intervals of measures and ISS: order statistics of the pooled
-        # (replicates x samples) values on the fitted scale, then transformed
-        # (the transforms are monotone, so this equals transforming first)
+        means = np.clip(float(p_point.mean()) + (sub_means - sub_means[0]), 0.0, 1.0)
+        p = float(p_point.mean())
+        lo, hi = np.percentile(means[1:], _PCT)
+        g_lo, g_hi = to_output_scale("p_iss15", np.array([lo, hi]))
+        c = 0.5 * (g_lo + g_hi)
+        f = self.p_interval_inflation
+        w_lo, w_hi = from_output_scale(
+            "p_iss15", np.array([c - f * (c - g_lo), c + f * (g_hi - c)])
+        )
+        return p, (min(float(lo), float(w_lo)), max(float(hi), float(w_hi)))
+
+    def _output_intervals(
+        self, raw: FloatArray
+    ) -> tuple[dict[str, float], dict[str, tuple[float, float]]]:
+        """Each fitted output (measures and ISS) at the reading and its 95% interval.
+
+        Order statistics of the pooled (replicates x samples) values on the
+        fitted scale, then transformed (the transforms are monotone, so this
+        equals transforming first); the surrogate's own error (held-out
+        calibrated 95% bound m at the reading) added in quadrature to each side
+        about the point value: independent errors; an output the sensors do not
+        move gets +-m, one they move a lot little more.
+        """
+        n_out = int(raw.shape[0])
         pooled = np.array(raw[:, 1:, 1:]).reshape(n_out, -1)
         n = pooled.shape[1]
         k_lo = max(math.ceil(_PCT[0] / 100.0 * n) - 1, 0)
@@ -529,48 +591,17 @@ class SurrogateFamily:
         q_los = pooled[:, k_lo].copy()
         pooled.partition(k_hi, axis=1)
         q_his = pooled[:, k_hi].copy()
-        means = np.clip(float(p_point.mean()) + (sub_means - sub_means[0]), 0.0, 1.0)
-        p = float(p_point.mean())
-        lo, hi = np.percentile(means[1:], _PCT)
-        # widened about its centre on the logit scale by the held-out
-        # calibration factor (the surrogate's own error)
-        g_lo, g_hi = to_output_scale("p_iss15", np.array([lo, hi]))
-        c = 0.5 * (g_lo + g_hi)
-        f = self.p_interval_inflation
-        w_lo, w_hi = from_output_scale(
-            "p_iss15", np.array([c - f * (c - g_lo), c + f * (g_hi - c)])
-        )
-        p_ci = (min(float(lo), float(w_lo)), max(float(hi), float(w_hi)))
-        iss = 0.0
-        iss_ci = (0.0, 0.0)
         # the replicates' spread at the reading, every output in one call (the same
         # bits as one call per output: pairwise sums over the same 150 values)
         sds = np.std(raw[:, 1:, 0], axis=1, ddof=1)
+        points: dict[str, float] = {}
+        cis: dict[str, tuple[float, float]] = {}
         for k, name in enumerate(self._fitted):
-            # the surrogate's own error (held-out calibrated 95% bound m at the
-            # reading) added in quadrature to each side of the sensor x bootstrap
-            # interval about the point value: independent errors; a measure the
-            # sensors do not move gets +-m, one they move a lot little more
-            sd = max(float(sds[k]), _sd_floor(name))
-            m = self.interval_factors.get(name, 0.0) * sd
+            m = self.interval_factors.get(name, 0.0) * max(float(sds[k]), _sd_floor(name))
             mid, q_lo, q_hi = float(raw[k, 0, 0]), float(q_los[k]), float(q_his[k])
             g_lo = min(q_lo, mid - math.hypot(max(mid - q_lo, 0.0), m))
             g_hi = max(q_hi, mid + math.hypot(max(q_hi - mid, 0.0), m))
             point, lo, hi = (float(v) for v in from_output_scale(name, np.array([mid, g_lo, g_hi])))
-            if name == "iss":
-                iss, iss_ci = point, (lo, hi)
-            else:
-                measures[name] = point
-                cis[name] = (lo, hi)
-        return UncertaintyResult(
-            p_iss15=p,
-            p_iss15_ci95=p_ci,
-            iss=iss,
-            iss_ci95=iss_ci,
-            measures=MappingProxyType(measures),
-            measures_ci95=MappingProxyType(cis),
-            n_samples=N_SENSOR_SAMPLES,
-            n_bootstrap=nb1 - 1,
-            clamped_inputs=clamped,
-            p_interval_inflation=self.p_interval_inflation,
-        )
+            points[name] = point
+            cis[name] = (lo, hi)
+        return points, cis
