@@ -62,7 +62,7 @@ from typing import Final
 
 import numpy as np
 import numpy.typing as npt
-from scipy.optimize import least_squares
+from scipy.optimize import least_squares, leastsq
 
 from models.arrays import FloatArray
 from models.constants import G_MS2
@@ -150,6 +150,12 @@ MAX_RECORD_DURATION_S: Final[float] = MAX_RECORD_DURATION_MS / 1_000.0
 #: Relative size of the total sum of squares below which a resultant counts as
 #: constant (r^2 is then reported as 0).
 _DEGENERATE_SS: Final[float] = 1e-12
+
+#: The haversine fit's MINPACK tolerances (ftol, xtol, gtol): scipy's
+#: ``least_squares`` defaults, which the fit used until 2026-12-04.
+_LM_TOLERANCE: Final[float] = 1e-8
+#: MINPACK's ``info`` values of a converged fit (``least_squares``' success).
+_LM_SUCCESS: Final[frozenset[int]] = frozenset({1, 2, 3, 4})
 
 #: Relative tolerance when converting times to sample counts.
 _GRID_EPS: Final[float] = 1e-9
@@ -454,22 +460,34 @@ def _fit_haversine(t: FloatArray, a: FloatArray, delta_v_kmh: float) -> Haversin
     # MINPACK's Levenberg-Marquardt first ([R] a third of the bounded trust-region
     # method's time on the EDR example, 0.8 against 2.3 ms, measured 2026-12-04: its
     # loop is compiled); it takes no bounds, so a fit that leaves them (or fails) is
-    # redone by the bounded method from the same start
+    # redone by the bounded method from the same start. MINPACK through `leastsq`: the
+    # call `least_squares(method="lm")` makes (its tolerances, 200 evaluations, diag =
+    # 1 / x_scale, factor 100), the same fit, without that wrapper's set-up (0.3 ms)
     with np.errstate(all="ignore"):  # a trial step may leave the domain
-        sol = least_squares(residual, x0=x0, jac=jacobian, x_scale=scale, method="lm")
-    if not (
-        sol.success and np.all(np.isfinite(sol.x)) and sol.x[0] >= 0.0 and t_lo <= sol.x[1] <= t_hi
-    ):
-        sol = least_squares(
+        x, _, _, _, ier = leastsq(
+            residual,
+            x0,
+            Dfun=jacobian,
+            full_output=True,
+            ftol=_LM_TOLERANCE,
+            xtol=_LM_TOLERANCE,
+            gtol=_LM_TOLERANCE,
+            maxfev=100 * x0.size,
+            factor=100.0,
+            diag=1.0 / scale,
+        )
+    x = np.asarray(x, dtype=np.float64)
+    if not (ier in _LM_SUCCESS and np.all(np.isfinite(x)) and x[0] >= 0.0 and t_lo <= x[1] <= t_hi):
+        x = least_squares(
             residual,
             x0=x0,
             jac=jacobian,
             bounds=(np.array([0.0, t_lo]), np.array([np.inf, t_hi])),
             x_scale=scale,
             method="trf",
-        )
-    amp, dur = float(sol.x[0]), float(sol.x[1])
-    ss_res = float(np.sum(residual(sol.x) ** 2))
+        ).x
+    amp, dur = float(x[0]), float(x[1])
+    ss_res = float(np.sum(residual(x) ** 2))
     ss_tot = float(np.sum((a - np.mean(a)) ** 2))
     # A (numerically) constant resultant has no variance to explain: r^2 = 0.
     degenerate = ss_tot <= _DEGENERATE_SS * float(np.sum(a**2))

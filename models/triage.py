@@ -42,7 +42,8 @@ from models.injury.assessment import InjuryMeasures
 from models.lpm.domain import POSTURE_RANGE_DEG, SEAT_TRACK_RANGE_MM, clamp
 from models.lpm.fingerprint import lpm_code_sha256, sources_sha256
 from models.lpm.params import ParameterSet, available_parameter_sets, load_parameter_set
-from models.lpm.simulate import LpmResult, simulate, warm_up
+from models.lpm.simulate import LpmResult, simulate
+from models.lpm.simulate import warm_up as _warm_up_lpm
 from models.notification import (
     AirbagState,
     Body,
@@ -68,6 +69,7 @@ from models.surrogate.evaluate import (
     default_artifact_dir,
     evaluation_sha256,
 )
+from models.surrogate.kernels import warm_up as _warm_up_surrogates
 from models.surrogate.spec import P_RESOLUTION
 
 __all__ = [
@@ -92,6 +94,7 @@ __all__ = [
     "UnknownVehicleModel",
     "decide",
     "load_engine_models",
+    "warm_up",
     "occupant_evidence",
     "notification_field_inputs",
     "OccupantEvidence",
@@ -394,6 +397,13 @@ def load_surrogates(directory: Path | None = None) -> SurrogateLibrary | None:
     if reason is not None:
         raise ValueError(f"surrogates are stale: {reason}; run `aacn-triage build-surrogates`")
     return library
+
+
+def warm_up() -> None:
+    """Compile (or load from the numba cache) every compiled loop of the request path:
+    the LPM kernels and measures, and the surrogates' loops."""
+    _warm_up_lpm()
+    _warm_up_surrogates()
 
 
 def load_engine_models(

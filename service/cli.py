@@ -68,7 +68,7 @@ def _cmd_serve(args: argparse.Namespace) -> int:
     if workers > 1:
         # compile the kernels into the shared numba cache once, so that every worker
         # loads them instead of compiling them side by side
-        from models.lpm.simulate import warm_up
+        from models.triage import warm_up
         from service.balance import LOADS_ENV, WorkerLoads
 
         warm_up()

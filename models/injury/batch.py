@@ -49,6 +49,7 @@ __all__ = [
     "MEASURE_NAMES",
     "p_iss_at_least_batch",
     "p_iss15_batch",
+    "p_iss15_batch_trusted",
     "region_cumulative_risk_batch",
 ]
 
@@ -74,7 +75,7 @@ def _monotone(curve: Curve) -> Curve:
 
 def _hic_curves(hic: FloatArray, top: int = MAX_AIS) -> Curve:
     """``risk.hic_prasad_mertz_1999`` per level, AIS 1 to `top`."""
-    return _monotone({k: risk.hic_prasad_mertz_1999_level(hic, k) for k in range(1, top + 1)})
+    return _monotone(risk.hic_prasad_mertz_1999_levels(hic, range(1, top + 1)))
 
 
 def _nij_curves(nij: FloatArray, top: int = MAX_AIS) -> Curve:
@@ -300,6 +301,36 @@ def p_iss_at_least_batch(
     if not (math.isfinite(t) and t <= ISS_MAX):
         raise ValueError("`threshold` must be finite and at most 75")
     v, n = _values(values)
+    return _p_iss_at_least(v, n, body, age_years, impact_mode, t)
+
+
+def p_iss15_batch_trusted(
+    values: Mapping[str, FloatArray],
+    body: Body,
+    age_years: float | None = None,
+    impact_mode: ImpactMode | str = ImpactMode.FRONTAL,
+) -> FloatArray:
+    """:func:`p_iss15_batch` of measures the caller guarantees: the same numbers.
+
+    For the surrogate's request path, whose measures come out of the inverse
+    output transforms (finite and non-negative by construction): each value
+    is a 1-D float64 array of one common size, finite and >= 0, and the names
+    are :data:`MEASURE_NAMES`. Nothing of this is checked here (the checks cost
+    a tenth of the call on the request path's 3,700 sets).
+    """
+    n = next(iter(values.values())).size if values else 0
+    return _p_iss_at_least(values, n, body, age_years, impact_mode, ISS_TRIAGE_THRESHOLD)
+
+
+def _p_iss_at_least(
+    v: Mapping[str, FloatArray],
+    n: int,
+    body: Body,
+    age_years: float | None,
+    impact_mode: ImpactMode | str,
+    t: float,
+) -> FloatArray:
+    """:func:`p_iss_at_least_batch` of checked values (`n` sets)."""
     others = {k: x for k, x in v.items() if k not in ("hic15", "nij")}
     cum = _regions(others, n, body, age_years, impact_mode)
     pb, pc = _levels(cum["chest"], n), _levels(cum["abdomen"], n)

@@ -22,6 +22,7 @@ standard normal CDF.
 from __future__ import annotations
 
 import math
+from collections.abc import Iterable
 from typing import Final
 
 import numpy as np
@@ -72,6 +73,7 @@ __all__ = [
     "hic15_ais3_ncap_2008",
     "hic_prasad_mertz_1999",
     "hic_prasad_mertz_1999_level",
+    "hic_prasad_mertz_1999_levels",
     "ncap_2008_joint_risk",
     "ncap_2008_relative_risk",
     "neck_ais3_ncap_2008",
@@ -271,8 +273,8 @@ def hic_prasad_mertz_1999(hic: npt.ArrayLike) -> npt.NDArray[np.float64]:
         P(AIS >= 1), ..., P(AIS >= 6).
     """
     h = _measure(hic, "hic")
-    levels = range(1, len(HIC_PRASAD_MERTZ_ALPHA) + 1)
-    return force_monotone(np.stack([hic_prasad_mertz_1999_level(h, k) for k in levels], axis=-1))
+    levels = hic_prasad_mertz_1999_levels(h, range(1, len(HIC_PRASAD_MERTZ_ALPHA) + 1))
+    return force_monotone(np.stack(list(levels.values()), axis=-1))
 
 
 def hic_prasad_mertz_1999_level(
@@ -295,12 +297,39 @@ def hic_prasad_mertz_1999_level(
     ndarray, shape (...)
         The published P(AIS >= n) curve.
     """
-    alpha = HIC_PRASAD_MERTZ_ALPHA[level - 1]
-    beta = HIC_PRASAD_MERTZ_BETA[level - 1]
+    return hic_prasad_mertz_1999_levels(hic, (level,))[level]
+
+
+def hic_prasad_mertz_1999_levels(
+    hic: npt.NDArray[np.float64], levels: Iterable[int]
+) -> dict[int, npt.NDArray[np.float64]]:
+    """Several levels of :func:`hic_prasad_mertz_1999` before it is forced monotone.
+
+    :func:`hic_prasad_mertz_1999_level` of each level, the same numbers; the
+    terms that do not depend on the level (which HIC are positive, 200/HIC)
+    computed once. The input is not checked.
+
+    Parameters
+    ----------
+    hic : ndarray, shape (...)
+        Finite, non-negative HIC values.
+    levels : iterable of int
+        AIS levels n, each 1..6.
+
+    Returns
+    -------
+    dict of int to ndarray, each shape (...)
+    """
     positive = hic > 0.0
     safe = np.where(positive, hic, 1.0)
-    p = expit(beta * safe - alpha - _PRASAD_MERTZ_HYPERBOLIC / safe)
-    return np.asarray(np.where(positive, p, 0.0), dtype=np.float64)
+    hyperbolic = _PRASAD_MERTZ_HYPERBOLIC / safe
+    out: dict[int, npt.NDArray[np.float64]] = {}
+    for level in levels:
+        alpha = HIC_PRASAD_MERTZ_ALPHA[level - 1]
+        beta = HIC_PRASAD_MERTZ_BETA[level - 1]
+        p = np.asarray(expit(beta * safe - alpha - hyperbolic), dtype=np.float64)
+        out[level] = np.where(positive, p, 0.0)
+    return out
 
 
 def hic15_ais3_ncap_2008(hic15: npt.ArrayLike) -> npt.NDArray[np.float64]:

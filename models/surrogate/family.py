@@ -17,7 +17,7 @@ from threadpoolctl import threadpool_limits  # type: ignore[import-untyped]
 
 from models.arrays import FloatArray, IntArray
 from models.impact_mode import ImpactMode
-from models.injury.batch import p_iss15_batch
+from models.injury.batch import p_iss15_batch_trusted
 from models.notification import Body
 from models.surrogate.family_constants import (
     _MIN_CALIBRATION_POINTS,
@@ -197,7 +197,7 @@ class SurrogateFamily:
             name: from_output_scale(name, raw_measures[i]).reshape(-1)
             for i, name in enumerate(self._measures)
         }
-        p = p_iss15_batch(values, self._body, age_years, self._mode)
+        p = p_iss15_batch_trusted(values, self._body, age_years, self._mode)
         return np.asarray(p.reshape(shape), dtype=np.float64)
 
     def _raw_all(self, x: FloatArray) -> FloatArray:
@@ -348,6 +348,27 @@ class SurrogateFamily:
             others = np.ones(n_p, dtype=bool)
             others[[j - 1, j]] = False
             w[np.ix_(zone, others)] = 0.0
+        return w
+
+    def _weights_at(self, dv: float) -> list[float]:
+        """:meth:`_weights` at one delta-V (km/h), as floats: the same numbers.
+
+        The request path asks for one point; numpy's scalar functions give the
+        bits of its array loops (Python's :mod:`math` would not), without the
+        array method's dozen small-array calls.
+        """
+        v = np.log(np.float64(dv))
+        n_p = len(self._pieces)
+        k = int(np.searchsorted(self._edges, np.exp(v), side="right")) - 1
+        w = [0.0] * n_p
+        w[min(max(k, 0), n_p - 1)] = 1.0
+        for j, e, half in self._blends:
+            u = min(max(float((v - (e - half)) / (2.0 * half)), 0.0), 1.0)
+            if not 0.0 < u < 1.0:
+                continue  # outside this edge's blend zone: w stays as set
+            up = u * u * (3.0 - 2.0 * u)  # _smoothstep
+            w = [0.0] * n_p
+            w[j - 1], w[j] = 1.0 - up, up
         return w
 
     def head_clearance(self, x: npt.ArrayLike) -> FloatArray:
@@ -510,13 +531,14 @@ class SurrogateFamily:
         seat[1:] = np.clip(
             xc[_SEAT] + seat_track_sd_mm * _NORMALS[:, 1], self._lo[_SEAT], self._hi[_SEAT]
         )
-        w = self._weights(xc[0])[0]
+        w = self._weights_at(float(xc[0]))
         # a weight of exactly 1 (inside one piece) multiplies nothing: x * 1.0 == x
         parts = [
-            self._pieces[int(i)].samples(xc[None, :], post, seat)
-            if w[i] == 1.0
-            else w[i] * self._pieces[int(i)].samples(xc[None, :], post, seat)
-            for i in np.flatnonzero(w > 0.0)
+            self._pieces[i].samples(xc[None, :], post, seat)
+            if wi == 1.0
+            else wi * self._pieces[i].samples(xc[None, :], post, seat)
+            for i, wi in enumerate(w)
+            if wi > 0.0
         ]
         return parts[0] if len(parts) == 1 else parts[0] + parts[1]
 

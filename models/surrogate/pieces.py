@@ -13,11 +13,11 @@ from typing import Any, Final
 
 import numpy as np
 import numpy.typing as npt
-from scipy.sparse import csr_array
 
 from models.arrays import FloatArray, IntArray
 from models.surrogate.basis import design_matrix, evaluate_univariate, evaluate_univariate_at
 from models.surrogate.family_constants import _POSTURE, _SEAT
+from models.surrogate.kernels import grouped_coefficients
 from models.surrogate.kriging import ResidualKriging
 from models.surrogate.spec import (
     HEAD_CLEARANCE,
@@ -44,9 +44,11 @@ class _Piece:
     """Point and bootstrap PCEs of every output on one delta-V piece (immutable)."""
 
     __slots__ = (
+        "_coef_cols",
+        "_coef_ptr",
         "_coef_t",
+        "_coef_vals",
         "_group_ptr",
-        "_group_shape",
         "_hi",
         "_lo",
         "_maxdeg",
@@ -54,17 +56,18 @@ class _Piece:
         "_pairs",
         "_ranges",
         "_recs",
-        "_term_index",
         "_terms",
         "outputs",
     )
 
     outputs: tuple[str, ...]
     _coef_t: FloatArray
+    #: `_coef_t` in compressed sparse rows (row pointers, columns, values)
+    _coef_ptr: IntArray
+    _coef_cols: IntArray
+    _coef_vals: FloatArray
     #: CSR row pointers of the (posture, seat track) groups over the sorted terms
     _group_ptr: IntArray
-    _group_shape: tuple[int, int]
-    _term_index: IntArray
     _nb1: int
     _hi: FloatArray
     _lo: FloatArray
@@ -140,13 +143,18 @@ class _Piece:
         sa(self, "_coef_t", coef_t)
         sa(self, "_pairs", pairs)
         n_terms = int(terms.shape[0])
-        term_index = np.arange(n_terms, dtype=np.int64)
         group_ptr = np.append(starts, n_terms).astype(np.int64)
-        for arr in (term_index, group_ptr):
-            arr.flags.writeable = False
-        sa(self, "_term_index", term_index)
+        group_ptr.flags.writeable = False
         sa(self, "_group_ptr", group_ptr)
-        sa(self, "_group_shape", (int(starts.size), n_terms))
+        nz_rows, nz_cols = np.nonzero(coef_t)  # row-major: columns increasing per row
+        coef_ptr = np.searchsorted(nz_rows, np.arange(n_terms + 1)).astype(np.int64)
+        coef_cols = nz_cols.astype(np.int64)
+        coef_vals = np.ascontiguousarray(coef_t[nz_rows, nz_cols])
+        for arr in (coef_ptr, coef_cols, coef_vals):
+            arr.flags.writeable = False
+        sa(self, "_coef_ptr", coef_ptr)
+        sa(self, "_coef_cols", coef_cols)
+        sa(self, "_coef_vals", coef_vals)
 
     @property
     def n_bootstrap(self) -> int:
@@ -220,12 +228,17 @@ class _Piece:
             s *= uni[self._terms[:, j]]
         psi2 = np.take(up, self._pairs[:, 0], axis=1) * np.take(us, self._pairs[:, 1], axis=1)
         # per (posture, seat track) group the coefficients weighted by the term's
-        # other factor: a sparse (M, terms) matrix with one entry per term, times
-        # the coefficients, (M, O(B+1)). [R] scipy's CSR product: 0.13 ms against
-        # 0.95 ms for a multiply and np.add.reduceat on a 446 x 1208 block (one
-        # pass, no temporary), measured 2026-12-02
-        grouped = csr_array((s, self._term_index, self._group_ptr), shape=self._group_shape)
-        c2 = np.asarray(grouped @ self._coef_t)
+        # other factor, (M, O(B+1)), over the coefficients' non-zeros only
+        # (models.surrogate.kernels: the numbers of scipy's CSR product of a
+        # one-entry-per-term (M, terms) matrix with the dense coefficients)
+        c2 = grouped_coefficients(
+            s,
+            self._group_ptr,
+            self._coef_ptr,
+            self._coef_cols,
+            self._coef_vals,
+            self._coef_t.shape[1],
+        )
         return (psi2 @ c2).T.reshape(len(self.outputs), self._nb1, -1)
 
 

@@ -312,3 +312,17 @@ def test_shipped_heldout_targets_are_todays_direct_lpm_runs() -> None:
         c, n = assert_lpm_close(lpm_runs(spec, x, params).y, y, context=spec.name)
         close, total = close + c, total + n
     assert close >= LPM_CLOSE_SHARE * total, (close, total)
+
+
+def test_one_point_blend_weights_are_the_array_weights() -> None:
+    """The request path's scalar blend weights equal the array method's, bit for bit,
+    across every family's delta-V domain (blend zones and piece interiors)."""
+    for spec_name, fam in SurrogateLibrary.load().families().items():
+        dv = np.concatenate(
+            [np.geomspace(fam._lo[0], fam._hi[0], 801), [fam._lo[0], fam._hi[0]], fam._edges]
+        )
+        dv = dv[(dv >= fam._lo[0]) & (dv <= fam._hi[0])]
+        arr = fam._weights(dv)
+        one = np.array([fam._weights_at(float(v)) for v in dv])
+        assert np.array_equal(arr, one), spec_name
+        assert np.any((arr > 0.0) & (arr < 1.0)), f"{spec_name}: no blend zone exercised"
