@@ -38,7 +38,9 @@ from models.surrogate.family_constants import (
 from models.surrogate.pieces import _KrigedPiece, _Piece, _piece, _smoothstep, _SplitPiece
 from models.surrogate.spec import (
     INPUT_NAMES,
+    MEASURE_FLOORS,
     from_output_scale,
+    measures_from_output_scale,
     to_output_scale,
 )
 
@@ -193,10 +195,8 @@ class SurrogateFamily:
         ndarray, shape (...)
         """
         shape = raw_measures.shape[1:]
-        values = {
-            name: from_output_scale(name, raw_measures[i]).reshape(-1)
-            for i, name in enumerate(self._measures)
-        }
+        physical = measures_from_output_scale(self._measures, raw_measures)
+        values = {name: physical[i].reshape(-1) for i, name in enumerate(self._measures)}
         p = p_iss15_batch_trusted(values, self._body, age_years, self._mode)
         return np.asarray(p.reshape(shape), dtype=np.float64)
 
@@ -558,17 +558,9 @@ class SurrogateFamily:
         n_s = N_SENSOR_SAMPLES
         # one pass through the risk curves for both sets (each set's P is its own:
         # the batch is elementwise), [point PCE at every sample | replicates at the
-        # subset], gathered straight from `raw` (no copy of all of its measure rows)
+        # subset]: the subset's columns first (a copy of a sixth of `raw`), then the rows
         both = np.concatenate(
-            (
-                raw[mr, 0, 1:],
-                raw[
-                    mr[:, None, None],
-                    np.arange(1, nb1)[None, :, None],
-                    (1 + _P_SUBSET)[None, None, :],
-                ].reshape(mr.size, -1),
-            ),
-            axis=1,
+            (raw[mr, 0, 1:], raw[:, 1:, 1 + _P_SUBSET][mr].reshape(mr.size, -1)), axis=1
         )
         p_both = self._p_from_raw(both, age_years)
         p_point = p_both[:n_s]  # (n,)
@@ -616,14 +608,22 @@ class SurrogateFamily:
         # the replicates' spread at the reading, every output in one call (the same
         # bits as one call per output: pairwise sums over the same 150 values)
         sds = np.std(raw[:, 1:, 0], axis=1, ddof=1)
-        points: dict[str, float] = {}
-        cis: dict[str, tuple[float, float]] = {}
+        fitted = np.empty((n_out, 3))  # [reading, low, high] per output, fitted scale
         for k, name in enumerate(self._fitted):
             m = self.interval_factors.get(name, 0.0) * max(float(sds[k]), _sd_floor(name))
             mid, q_lo, q_hi = float(raw[k, 0, 0]), float(q_los[k]), float(q_his[k])
             g_lo = min(q_lo, mid - math.hypot(max(mid - q_lo, 0.0), m))
             g_hi = max(q_hi, mid + math.hypot(max(q_hi - mid, 0.0), m))
-            point, lo, hi = (float(v) for v in from_output_scale(name, np.array([mid, g_lo, g_hi])))
-            points[name] = point
-            cis[name] = (lo, hi)
+            fitted[k] = (mid, g_lo, g_hi)
+        # to physical values: the measures' rows in one pass (element-wise, the same
+        # numbers as one call per output), the others one by one
+        physical = np.empty_like(fitted)
+        rows = [k for k, name in enumerate(self._fitted) if name in MEASURE_FLOORS]
+        physical[rows] = measures_from_output_scale([self._fitted[k] for k in rows], fitted[rows])
+        for k, name in enumerate(self._fitted):
+            if name not in MEASURE_FLOORS:
+                physical[k] = from_output_scale(name, fitted[k])
+        values = physical.tolist()
+        points = {name: values[k][0] for k, name in enumerate(self._fitted)}
+        cis = {name: (values[k][1], values[k][2]) for k, name in enumerate(self._fitted)}
         return points, cis

@@ -348,6 +348,26 @@ def from_output_scale(name: str, value: npt.ArrayLike) -> FloatArray:
     return np.asarray(np.maximum(np.exp(np.minimum(v, 50.0)) - floor, 0.0), dtype=np.float64)
 
 
+def measures_from_output_scale(names: Sequence[str], values: FloatArray) -> FloatArray:
+    """:func:`from_output_scale` of measures, row by row, in one pass: the same numbers.
+
+    Parameters
+    ----------
+    names : sequence of str
+        Keys of :data:`MEASURE_FLOORS` (the positive measures), one per row.
+    values : ndarray, shape (len(names), ...)
+        Fitted-scale values.
+
+    Returns
+    -------
+    ndarray, shape like `values`
+    """
+    floors = np.array([MEASURE_FLOORS[n] for n in names]).reshape(
+        (len(names),) + (1,) * (values.ndim - 1)
+    )
+    return np.asarray(np.maximum(np.exp(np.minimum(values, 50.0)) - floors, 0.0), dtype=np.float64)
+
+
 @dataclass(frozen=True)
 class FamilySpec:
     """One surrogate family.
