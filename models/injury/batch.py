@@ -73,9 +73,30 @@ def _monotone(curve: Curve) -> Curve:
     return out
 
 
+#: Highest AIS level up to which the Prasad/Mertz HIC curves are nested for
+#: every HIC > 0: for n < n' <= 4, alpha_n < alpha_n' and beta_n > beta_n' (the
+#: argument of level n exceeds that of level n' by more than 1.5 at any HIC), so
+#: their cumulative minimum at level k is the level-k curve itself; AIS5+ and
+#: AIS6 cross the lower levels above HIC of about 3250 (``risk.hic_prasad_mertz_1999``).
+_HIC_NESTED_TOP: Final[int] = 4
+
+
 def _hic_curves(hic: FloatArray, top: int = MAX_AIS) -> Curve:
     """``risk.hic_prasad_mertz_1999`` per level, AIS 1 to `top`."""
     return _monotone(risk.hic_prasad_mertz_1999_levels(hic, range(1, top + 1)))
+
+
+def _hic_curves_at(hic: FloatArray, levels: set[int]) -> Curve:
+    """:func:`_hic_curves` at the `levels` asked: the same numbers.
+
+    Up to :data:`_HIC_NESTED_TOP` the curves are nested, so only the levels
+    asked are evaluated (tests/injury/test_injury_batch.py holds this equal to
+    the cumulative minimum, bit for bit); above it, every level up to the top.
+    """
+    if max(levels) > _HIC_NESTED_TOP:
+        curves = _hic_curves(hic, max(levels))
+        return {k: curves[k] for k in levels}
+    return risk.hic_prasad_mertz_1999_levels(hic, sorted(levels))
 
 
 def _nij_curves(nij: FloatArray, top: int = MAX_AIS) -> Curve:
@@ -264,7 +285,7 @@ def _head_neck_at(
     out = {k: np.zeros(n) for k in levels}
     curves: list[Curve] = []
     if "hic15" in values and top:
-        curves.append(_hic_curves(values["hic15"], top))
+        curves.append(_hic_curves_at(values["hic15"], levels))
     if "nij" in values and top:
         curves.append(_nij_curves(values["nij"], top))
     for k in levels:

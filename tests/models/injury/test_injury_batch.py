@@ -101,3 +101,23 @@ def test_bad_input_is_rejected() -> None:
         p_iss15_batch({"hic15": np.ones(2), "nij": np.ones(3)}, Body.MALE_50TH)
     with pytest.raises(ValueError, match="at most 75"):
         p_iss_at_least_batch({"hic15": np.ones(2)}, Body.MALE_50TH, threshold=76)
+
+
+def test_nested_hic_levels_need_no_cumulative_minimum() -> None:
+    """Up to AIS 4 the Prasad/Mertz curves are nested: the levels asked alone give
+    the cumulative minimum's numbers, bit for bit (HIC 0 to far beyond any crash)."""
+    from itertools import combinations
+
+    from models.injury.batch import _hic_curves, _hic_curves_at
+
+    rng = np.random.default_rng(5)
+    hic = np.concatenate(
+        [[0.0, 1e-300, 1e-9, 1.0, 200.0, 3250.0, 3740.0, 1e5, 1e12], rng.uniform(0, 20_000, 20_000)]
+    )
+    full = _hic_curves(hic)
+    for r in range(1, 5):
+        for levels in combinations(range(1, 7), r):
+            got = _hic_curves_at(hic, set(levels))
+            assert sorted(got) == sorted(levels) or max(levels) > 4
+            for k in levels:
+                assert np.array_equal(got[k], full[k]), (levels, k)
