@@ -577,7 +577,8 @@ def _in_domain(occupant: Occupant, index: int, assumptions: list[Assumption]) ->
 
 
 def _measures_dict(measures: InjuryMeasures) -> dict[str, float]:
-    return {k: float(v) for k, v in dataclasses.asdict(measures).items() if v is not None}
+    values = ((f.name, getattr(measures, f.name)) for f in dataclasses.fields(measures))
+    return {k: float(v) for k, v in values if v is not None}
 
 
 def _run(

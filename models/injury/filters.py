@@ -87,6 +87,7 @@ def _validate_rate_and_class(sample_rate_hz: float, cfc: int, factor: float) -> 
         )
 
 
+@lru_cache(maxsize=64)
 def cfc_coefficients(
     sample_rate_hz: float, cfc: int, *, standard: Literal["sae_j211", "iso_6487"] = "sae_j211"
 ) -> tuple[tuple[float, float, float], tuple[float, float, float]]:
@@ -159,9 +160,36 @@ def _forward_backward_rows(
     """
     m, n = x.shape
     out = np.empty_like(x)
+    if m == 1:
+        _one_pass(x[0], out[0], b, a, zi, 0, n, 1)  # forward
+        _one_pass(out[0], out[0], b, a, zi, n - 1, -1, -1)  # backward, in place
+        return out
+    # several rows side by side: each row's recursion is a chain of dependent
+    # operations, so stepping all rows at once lets their chains overlap in the
+    # processor. [R] 87 -> 42 us for four rows of 4,400 samples (measured
+    # 2026-12-04); each row's operations and their order are unchanged
+    z0 = np.empty(m)
+    z1 = np.empty(m)
     for r in range(m):
-        _one_pass(x[r], out[r], b, a, zi, 0, n, 1)  # forward
-        _one_pass(out[r], out[r], b, a, zi, n - 1, -1, -1)  # backward, in place
+        z0[r] = zi[0] * x[r, 0]
+        z1[r] = zi[1] * x[r, 0]
+    for k in range(n):  # forward
+        for r in range(m):
+            xn = x[r, k]
+            yn = z0[r] + b[0] * xn
+            z0[r] = z1[r] + xn * b[1] - yn * a[1]
+            z1[r] = xn * b[2] - yn * a[2]
+            out[r, k] = yn
+    for r in range(m):
+        z0[r] = zi[0] * out[r, n - 1]
+        z1[r] = zi[1] * out[r, n - 1]
+    for k in range(n - 1, -1, -1):  # backward, in place
+        for r in range(m):
+            xn = out[r, k]
+            yn = z0[r] + b[0] * xn
+            z0[r] = z1[r] + xn * b[1] - yn * a[1]
+            z1[r] = xn * b[2] - yn * a[2]
+            out[r, k] = yn
     return out
 
 

@@ -149,6 +149,10 @@ def test_forward_backward_is_scipy_filtfilt_bit_for_bit(cfc: int, fs: float) -> 
     assert np.array_equal(
         forward_backward(b, a, rows.T, axis=0), filtfilt(b, a, rows.T, axis=0, padlen=0)
     )
+    many = rng.normal(size=(9, 700)).cumsum(axis=1)  # rows stepped side by side
+    assert np.array_equal(
+        forward_backward(b, a, many, axis=1), filtfilt(b, a, many, axis=1, padlen=0)
+    )
 
 
 @pytest.mark.parametrize("fs", [1_000.0, 2_000.0, 10_000.0, 20_000.0, 12_345.0])
