@@ -440,18 +440,30 @@ def _fit_haversine(t: FloatArray, a: FloatArray, delta_v_kmh: float) -> Haversin
     t_lo, t_hi = 2.0 * step, max(2.0 * span, 4.0 * step)
     t_guess = min(max(t_guess, 1.5 * t_lo), 0.99 * t_hi)
 
+    # the terms of one duration, shared by the residual and the Jacobian at the same
+    # point (MINPACK asks for both there): the numbers of `haversine`, each computed once
+    pi_t = np.pi * t
+    last: dict[float, tuple[npt.NDArray[np.bool_], FloatArray, FloatArray]] = {}
+
+    def terms(dur: float) -> tuple[npt.NDArray[np.bool_], FloatArray, FloatArray]:
+        if dur not in last:
+            phase = pi_t / dur
+            last.clear()
+            last[dur] = ((t >= 0.0) & (t <= dur), phase, np.sin(phase) ** 2)
+        return last[dur]
+
     def residual(p: FloatArray) -> FloatArray:
-        return haversine(t, float(p[0]), float(p[1])) - a
+        inside, _, sin2 = terms(float(p[1]))
+        return np.where(inside, float(p[0]) * sin2, 0.0) - a  # haversine(t, A, T) - a
 
     def jacobian(p: FloatArray) -> FloatArray:
         # d/dA and d/dT of A sin^2(pi t / T) on [0, T] (0 outside): sin^2(pi t / T)
         # and -A (pi t / T^2) sin(2 pi t / T). [R] exact derivatives instead of
         # scipy's two extra residuals per step: about half the fit time
         amp, dur = float(p[0]), float(p[1])
-        inside = (t >= 0.0) & (t <= dur)
-        phase = np.pi * t / dur
+        inside, phase, sin2 = terms(dur)
         jac = np.empty((t.size, 2))
-        jac[:, 0] = np.where(inside, np.sin(phase) ** 2, 0.0)
+        jac[:, 0] = np.where(inside, sin2, 0.0)
         jac[:, 1] = np.where(inside, -amp * phase / dur * np.sin(2.0 * phase), 0.0)
         return jac
 

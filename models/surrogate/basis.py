@@ -27,6 +27,7 @@ import numpy as np
 import numpy.typing as npt
 
 from models.arrays import FloatArray, IntArray
+from models.surrogate.kernels import univariate_rows
 
 __all__ = [
     "Recurrence",
@@ -117,19 +118,17 @@ def evaluate_univariate(x: npt.ArrayLike, rec: Recurrence, degree: int) -> Float
     -------
     ndarray, shape (n, degree + 1)
     """
-    xv = np.asarray(x, dtype=np.float64).ravel()
+    xv = np.ascontiguousarray(x, dtype=np.float64).ravel()
     alpha, beta = rec
-    # built degree by degree as contiguous rows, returned as (n, degree + 1): the same
-    # arithmetic as column by column (IEEE operations, the square roots correctly
-    # rounded in math and numpy alike), without strided temporaries
-    sq = [math.sqrt(float(b)) for b in beta[: degree + 1]]
-    rows = np.empty((degree + 1, xv.size))
-    rows[0] = 1.0
-    if degree >= 1:
-        rows[1] = (xv - alpha[0]) / sq[1]
-    for k in range(1, degree):
-        rows[k + 1] = ((xv - alpha[k]) * rows[k] - sq[k] * rows[k - 1]) / sq[k + 1]
-    return np.ascontiguousarray(rows.T)
+    if alpha.shape[0] < degree + 1 or beta.shape[0] < degree + 1:
+        raise ValueError(f"the recurrence has fewer than {degree + 1} coefficients")
+    # a compiled pass per point (models.surrogate.kernels)
+    return univariate_rows(
+        xv,
+        np.ascontiguousarray(alpha, dtype=np.float64),
+        np.ascontiguousarray(beta, dtype=np.float64),
+        int(degree),
+    )
 
 
 def evaluate_univariate_at(x: float, rec: Recurrence, degree: int) -> FloatArray:

@@ -592,7 +592,13 @@ class SurrogateFamily:
         move gets +-m, one they move a lot little more.
         """
         n_out = int(raw.shape[0])
-        pooled = np.array(raw[:, 1:, 1:]).reshape(n_out, -1)
+        # each output's (replicates x samples) values as one row, copied in the order
+        # `raw` holds them in memory (the samples' axis is the outer one when `raw` is
+        # a product's transpose): an order statistic does not depend on the order
+        block = raw[:, 1:, 1:]
+        if raw.strides[1] < raw.strides[2]:
+            block = block.transpose(0, 2, 1)
+        pooled = np.array(block).reshape(n_out, -1)
         n = pooled.shape[1]
         k_lo = max(math.ceil(_PCT[0] / 100.0 * n) - 1, 0)
         k_hi = max(math.ceil(_PCT[1] / 100.0 * n) - 1, 0)

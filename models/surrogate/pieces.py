@@ -342,13 +342,14 @@ class _SplitPiece:
         basis = self._gate.sensor_basis(xc, post, seat)  # shared: the sides' basis is the gate's
         gate = self._gate.samples(xc, post, seat, basis)[0, 0]  # point gate PCE, (n,)
         wc = self.struck_weight(gate)
-        out = np.zeros((len(self.outputs), self.n_bootstrap + 1, post.size))
         fixed, up, us = basis
         for side, w in ((self._contact, wc), (self._free, 1.0 - wc)):
-            cols = np.flatnonzero(w > 0.0)
-            if cols.size == post.size and np.all(w == 1.0):
+            if np.all(w == 1.0):
                 # one side only: 0.0 + 1.0 * x == x (the fitted values are never -0.0)
                 return side.samples(xc, post, seat, basis)
+        out = np.zeros((len(self.outputs), self.n_bootstrap + 1, post.size))
+        for side, w in ((self._contact, wc), (self._free, 1.0 - wc)):
+            cols = np.flatnonzero(w > 0.0)
             if cols.size == post.size:
                 out += w * side.samples(xc, post, seat, basis)
             elif cols.size:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 from scipy.sparse import csr_array
@@ -55,3 +57,24 @@ def test_matern32_is_the_numpy_expression() -> None:
 
 def test_warm_up_runs() -> None:
     warm_up()
+
+
+@pytest.mark.parametrize("degree", [0, 1, 2, 15])
+def test_univariate_rows_is_the_numpy_recurrence(degree: int) -> None:
+    from models.surrogate.basis import evaluate_univariate
+
+    rng = np.random.default_rng(13 + degree)
+    x = rng.uniform(-1.5, 1.5, size=2000)
+    alpha = rng.normal(scale=0.1, size=degree + 3)
+    beta = rng.uniform(0.1, 0.5, size=degree + 3)
+    # the array form the compiled loop replaces, degree by degree
+    sq = [math.sqrt(float(b)) for b in beta[: degree + 1]]
+    rows = np.empty((degree + 1, x.size))
+    rows[0] = 1.0
+    if degree >= 1:
+        rows[1] = (x - alpha[0]) / sq[1]
+    for k in range(1, degree):
+        rows[k + 1] = ((x - alpha[k]) * rows[k] - sq[k] * rows[k - 1]) / sq[k + 1]
+    assert np.array_equal(evaluate_univariate(x, (alpha, beta), degree), rows.T)
+    with pytest.raises(ValueError, match="coefficients"):
+        evaluate_univariate(x, (alpha[:degree], beta[:degree]), degree)
