@@ -50,6 +50,7 @@ __all__ = [
     "p_iss_at_least_batch",
     "p_iss15_batch",
     "p_iss15_batch_trusted",
+    "region_blocks_checked",
     "region_cumulative_risk_batch",
 ]
 
@@ -185,7 +186,23 @@ def region_cumulative_risk_batch(
         over contiguous rows of n values).
     """
     v, n = _values(values)
-    return {r: _block(c, n) for r, c in _regions(v, n, body, age_years, impact_mode).items()}
+    return region_blocks_checked(v, n, body, age_years, impact_mode)
+
+
+def region_blocks_checked(
+    values: Mapping[str, FloatArray],
+    n: int,
+    body: Body,
+    age_years: float | None = None,
+    impact_mode: ImpactMode | str = ImpactMode.FRONTAL,
+) -> dict[str, FloatArray]:
+    """:func:`region_cumulative_risk_batch` of measures the caller has checked.
+
+    Each value a 1-D float64 array of size `n`, finite and >= 0, named in
+    :data:`MEASURE_NAMES` (``models.injury.assessment`` checks its scalars
+    itself). The same numbers.
+    """
+    return {r: _block(c, n) for r, c in _regions(values, n, body, age_years, impact_mode).items()}
 
 
 def _regions(
