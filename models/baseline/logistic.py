@@ -161,6 +161,14 @@ def _expit(x: FloatArray) -> FloatArray:
     return out
 
 
+def _expit_one(x: float) -> float:
+    """:func:`_expit` of one value: the same numbers."""
+    if x >= 0.0:
+        return float(1.0 / (1.0 + np.exp(np.float64(-x))))
+    e = np.exp(np.float64(x))
+    return float(e / (1.0 + e))
+
+
 def _readonly(a: npt.ArrayLike) -> FloatArray:
     arr = np.array(a, dtype=np.float64)
     arr.setflags(write=False)
@@ -403,12 +411,17 @@ class BaselineModel:
         ValueError
             As :meth:`encode`.
         """
-        r = self._predict_design(self.encode(features)[None, :])
+        x = self.encode(features)[None, :]
+        # the arithmetic of _predict_design on one row, the logistic in numpy
+        # scalars (their exponential is the array loop's: the same bits)
+        eta = float((x @ self.coefficients)[0])
+        var = float(np.einsum("ij,jk,ik->i", x, self.covariance, x)[0])
+        se = float(np.sqrt(max(var, 0.0)))
         return BaselinePrediction(
-            probability=float(r.probability[0]),
-            ci95=(float(r.ci95_low[0]), float(r.ci95_high[0])),
-            linear_predictor=float(r.linear_predictor[0]),
-            standard_error=float(r.standard_error[0]),
+            probability=_expit_one(eta),
+            ci95=(_expit_one(eta - Z_95 * se), _expit_one(eta + Z_95 * se)),
+            linear_predictor=eta,
+            standard_error=se,
         )
 
     def predict_many(self, X: npt.ArrayLike) -> BaselinePredictions:

@@ -318,3 +318,26 @@ def test_valid_copy_loads_with_its_own_checksum(tmp_path: Path, artifact: dict[s
     m = BaselineModel.from_artifact(path)
     assert m.sha256 == hashlib.sha256(path.read_bytes()).hexdigest()
     assert m.predict(_features()) == load_default().predict(_features())
+
+
+def test_one_occupant_prediction_is_the_design_rows_bit_for_bit(model: BaselineModel) -> None:
+    """predict's scalar logistic gives the numbers of the vectorised path on its own row."""
+    from models.baseline.logistic import _expit, _expit_one
+
+    x = np.concatenate([np.linspace(-800.0, 800.0, 4001), [0.0, -0.0, 1e-300]])
+    assert np.array_equal(_expit(x), np.array([_expit_one(float(v)) for v in x]))
+    for dv, age, sex in [(0.0, None, None), (37.5, 81.0, Sex.FEMALE), (150.0, 16.0, Sex.MALE)]:
+        f = BaselineFeatures(
+            delta_v_kmh=dv,
+            belted=dv < 50,
+            airbag_deployed=True,
+            frontal=dv > 10,
+            age_years=age,
+            sex=sex,
+        )
+        one = model.predict(f)
+        row = model._predict_design(model.encode(f)[None, :])
+        assert one.probability == float(row.probability[0])
+        assert one.ci95 == (float(row.ci95_low[0]), float(row.ci95_high[0]))
+        assert one.linear_predictor == float(row.linear_predictor[0])
+        assert one.standard_error == float(row.standard_error[0])
