@@ -7,7 +7,7 @@ import os
 import shutil
 import subprocess
 import uuid
-from collections.abc import Iterator
+from collections.abc import Iterator, Mapping, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
@@ -95,6 +95,20 @@ def wait_ready(base: str, server: Any, log_path: Any, timeout_s: float = 120.0) 
     raise AssertionError(f"server never became ready: {log_path.read_text()[-3000:]}")
 
 
+def create_key(
+    cli: Sequence[str], env: Mapping[str, str], role: str, name: str, timeout_s: float = 120.0
+) -> str:
+    """A new API key made by the command line (`cli` + ``keys create``), as it prints it."""
+    return subprocess.run(
+        [*cli, "keys", "create", "--role", role, "--name", name],
+        env=env,
+        capture_output=True,
+        text=True,
+        check=True,
+        timeout=timeout_s,
+    ).stdout.strip()
+
+
 @contextmanager
 def console_server(
     tmp_path: Path, *serve_args: str
@@ -108,14 +122,7 @@ def console_server(
     if exe is None:
         pytest.skip("the console script is not installed (pip install -e .)")
     env = {**os.environ, "AACN_DATABASE_URL": f"sqlite:///{tmp_path / 'served.db'}"}
-    key = subprocess.run(
-        [exe, "keys", "create", "--role", "admin", "--name", "ops"],
-        env=env,
-        capture_output=True,
-        text=True,
-        check=True,
-        timeout=120,
-    ).stdout.strip()
+    key = create_key([exe], env, "admin", "ops")
     port = free_port()
     log = tmp_path / "server.log"
     with log.open("w") as sink:

@@ -33,7 +33,7 @@ from tests.service.pages_support import (
     rear_seat_rollover,
     side_edr,
 )
-from tests.support import free_port, wait_ready
+from tests.support import create_key, free_port, wait_ready
 
 pytestmark = pytest.mark.browser
 
@@ -131,14 +131,7 @@ def served(chromium: Any, tmp_path_factory: pytest.TempPathFactory) -> Iterator[
     cli = [sys.executable, "-m", "service.cli"]
 
     def key(role: str, name: str) -> str:
-        return subprocess.run(
-            [*cli, "keys", "create", "--role", role, "--name", name],
-            env=env,
-            capture_output=True,
-            text=True,
-            check=True,
-            timeout=180,
-        ).stdout.strip()
+        return create_key(cli, env, role, name, timeout_s=180.0)
 
     keys = {
         "auditor": key("auditor", "ems-supervisor"),

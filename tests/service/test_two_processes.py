@@ -21,7 +21,7 @@ import httpx2 as httpx
 import pytest
 from sqlalchemy import create_engine, text
 
-from tests.support import free_port, summary, wait_ready
+from tests.support import create_key, free_port, summary, wait_ready
 
 pytestmark = pytest.mark.postgres
 
@@ -43,14 +43,7 @@ def two_servers(
         conn.execute(text(f'CREATE DATABASE "{name}"'))
     url = postgres_admin_url.rsplit("/", 1)[0] + "/" + name
     env = {**os.environ, "AACN_DATABASE_URL": url, "AACN_WORKERS": "1"}
-    key = subprocess.run(
-        [exe, "keys", "create", "--role", "admin", "--name", "center"],
-        env=env,
-        capture_output=True,
-        text=True,
-        check=True,
-        timeout=120,
-    ).stdout.strip()
+    key = create_key([exe], env, "admin", "center")
     servers: list[tuple[subprocess.Popen[bytes], Path]] = []
     bases = []
     try:
