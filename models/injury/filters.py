@@ -37,6 +37,7 @@ __all__ = [
     "SAE_J211_DESIGN_FACTOR",
     "cfc_coefficients",
     "cfc_filter",
+    "cfc_filter_rows",
     "forward_backward",
 ]
 
@@ -261,27 +262,125 @@ def forward_backward(
     return np.moveaxis(y.reshape(moved.shape), -1, axis)
 
 
-def _pad(x: npt.NDArray[np.float64], width: int) -> npt.NDArray[np.float64]:
-    """Point-symmetric (odd) reflection about each end, then constant extension.
+@njit(cache=True, nogil=True)
+def _padded_forward_backward_rows(
+    x: npt.NDArray[np.float64],
+    b: npt.NDArray[np.float64],
+    a: npt.NDArray[np.float64],
+    zi: npt.NDArray[np.float64],
+    width: int,
+) -> npt.NDArray[np.float64]:
+    """Each row of `x` padded by `width` samples at both ends, filtered, cropped back.
 
-    Odd reflection keeps the value and slope continuous at the ends, so a
-    constant or linear signal passes unchanged. When ``width`` exceeds the data,
-    the reflection covers ``n - 1`` samples and the rest repeats its end value.
+    The padding is a point-symmetric (odd) reflection about each end, then a
+    constant extension: odd reflection keeps the value and slope continuous at
+    the ends, so a constant or linear signal passes unchanged; when `width`
+    exceeds the data, the reflection covers ``n - 1`` samples and the rest
+    repeats its end value. The padded values are the numpy expressions'
+    (``2 x[0] - x[k]``, the same two operations), the passes those of
+    :func:`_forward_backward_rows`, and the result the central `n` samples:
+    the numbers of padding with numpy and calling :func:`forward_backward`, bit
+    for bit, without the padded copies and the crop's copy. [R] three rows of
+    2,001 samples, CFC 180 at 10 kHz: 46 -> 22 us (measured 2026-12-05).
+
+    Parameters
+    ----------
+    x : ndarray, shape (m, n)
+        ``n >= 2``.
+    b, a, zi : ndarray, shape (3,), (3,), (2,)
+        Coefficients and the steady state of :func:`_steady_state`.
+    width : int
+        Padding at each end, >= 1.
+
+    Returns
+    -------
+    ndarray, shape (m, n)
     """
-    n = x.size
+    m, n = x.shape
     refl = min(width, n - 1)
-    head = 2.0 * x[0] - x[refl:0:-1]
-    tail = 2.0 * x[-1] - x[-2 : -refl - 2 : -1]
     rest = width - refl
-    return np.concatenate(
-        (
-            np.full(rest, head[0]),
-            head,
-            x,
-            tail,
-            np.full(rest, tail[-1]),
-        )
-    )
+    total = n + 2 * width
+    buf = np.empty((m, total))
+    for r in range(m):
+        twice_first = 2.0 * x[r, 0]
+        twice_last = 2.0 * x[r, n - 1]
+        head0 = twice_first - x[r, refl]
+        for i in range(rest):
+            buf[r, i] = head0
+        for i in range(refl):
+            buf[r, rest + i] = twice_first - x[r, refl - i]
+        for i in range(n):
+            buf[r, width + i] = x[r, i]
+        for i in range(refl):
+            buf[r, width + n + i] = twice_last - x[r, n - 2 - i]
+        tail_end = twice_last - x[r, n - 1 - refl]
+        for i in range(rest):
+            buf[r, width + n + refl + i] = tail_end
+    if m == 1:
+        _one_pass(buf[0], buf[0], b, a, zi, 0, total, 1)  # forward, in place
+        _one_pass(buf[0], buf[0], b, a, zi, total - 1, -1, -1)  # backward
+    else:
+        z = np.empty((2, m))
+        _rows_pass(buf, buf, b, a, zi, z, 0, total, 1)
+        _rows_pass(buf, buf, b, a, zi, z, total - 1, -1, -1)
+    out = np.empty((m, n))
+    for r in range(m):
+        for i in range(n):
+            out[r, i] = buf[r, width + i]
+    return out
+
+
+@lru_cache(maxsize=64)
+def _filter_arrays(
+    sample_rate_hz: float, cfc: int, standard: Literal["sae_j211", "iso_6487"]
+) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64], npt.NDArray[np.float64], int]:
+    """The coefficients, steady state and end padding (samples) of one rate and class."""
+    b, a = cfc_coefficients(sample_rate_hz, cfc, standard=standard)
+    factor = _design_factor(standard)
+    pad_s = max(PAD_DURATION_S, _PAD_DESIGN_PERIODS / (cfc * factor))
+    width = max(1, math.ceil(pad_s * sample_rate_hz))
+    arrays = (np.array(b), np.array(a), np.array(_steady_state(b, a)))
+    for arr in arrays:
+        arr.flags.writeable = False
+    return arrays[0], arrays[1], arrays[2], width
+
+
+def cfc_filter_rows(
+    signals: npt.ArrayLike,
+    sample_rate_hz: float,
+    cfc: int,
+    *,
+    standard: Literal["sae_j211", "iso_6487"] = "sae_j211",
+) -> npt.NDArray[np.float64]:
+    """:func:`cfc_filter` of each row of `signals`: the same numbers, in one call.
+
+    Parameters
+    ----------
+    signals : array_like, shape (m, n)
+        Channels of one sampling rate and class, ``n >= 1``; finite.
+    sample_rate_hz, cfc, standard
+        As for :func:`cfc_filter`.
+
+    Returns
+    -------
+    ndarray of float64, shape (m, n)
+
+    Raises
+    ------
+    ValueError
+        As :func:`cfc_filter` (`signals` must be 2-D here).
+    """
+    x = np.ascontiguousarray(signals, dtype=np.float64)
+    if x.ndim != 2:
+        raise ValueError(f"`signals` must be 2-D, got shape {x.shape}.")
+    if x.shape[1] == 0:
+        raise ValueError("`signal` must not be empty.")
+    if not np.all(np.isfinite(x)):
+        raise ValueError("`signal` must be finite (no NaN or inf).")
+    b, a, zi, width = _filter_arrays(sample_rate_hz, cfc, standard)
+    if x.shape[1] == 1:
+        return x.copy()
+    return _padded_forward_backward_rows(x, b, a, zi, width)
 
 
 def cfc_filter(
@@ -337,16 +436,4 @@ def cfc_filter(
     x = np.asarray(signal, dtype=np.float64)
     if x.ndim != 1:
         raise ValueError(f"`signal` must be 1-D, got shape {x.shape}.")
-    if x.size == 0:
-        raise ValueError("`signal` must not be empty.")
-    if not np.all(np.isfinite(x)):
-        raise ValueError("`signal` must be finite (no NaN or inf).")
-    b, a = cfc_coefficients(sample_rate_hz, cfc, standard=standard)
-    if x.size == 1:
-        return x.copy()
-    factor = _design_factor(standard)
-    pad_s = max(PAD_DURATION_S, _PAD_DESIGN_PERIODS / (cfc * factor))
-    width = max(1, math.ceil(pad_s * sample_rate_hz))
-    padded = _pad(x, width)
-    y = forward_backward(b, a, padded)
-    return np.ascontiguousarray(y[width : width + x.size], dtype=np.float64)
+    return cfc_filter_rows(x[None, :], sample_rate_hz, cfc, standard=standard)[0]

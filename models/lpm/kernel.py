@@ -1016,7 +1016,6 @@ def _solve_accelerations(ws: np.ndarray) -> None:
 
 @njit(cache=True, inline="always", error_model="numpy")
 def _body_diagnostics(
-    q: np.ndarray,
     mb: np.ndarray,
     a_veh: float,
     head_fx: float,
@@ -1043,8 +1042,8 @@ def _body_diagnostics(
             # force of the neck on the head, expressed along the head axes
             fnx = mb[i, 3] * axx - head_fx
             fnz = mb[i, 3] * azz - head_fz
-            sa = math.sin(q[4])
-            ca = math.cos(q[4])
+            sa = ws[NQ + 5, 4]  # sin and cos of q[4], from the start of the step
+            ca = ws[NQ + 6, 4]
             diag[D_NECK_FZ] = -(fnx * sa + fnz * ca)  # tension (+)
             diag[D_NECK_FX] = fnx * ca - fnz * sa  # anterior (+) on the head
         elif k == 2:
@@ -1148,7 +1147,7 @@ def rhs_into(
         diag[D_V_INT] = v_int
         diag[D_P_PULSE] = p_pulse
         diag[D_P_ACTIVE] = p_active
-        _body_diagnostics(q, mb, a_veh, head_fx, head_fz, ws, diag)
+        _body_diagnostics(mb, a_veh, head_fx, head_fz, ws, diag)
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
