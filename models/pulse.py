@@ -62,6 +62,7 @@ from typing import Final
 
 import numpy as np
 import numpy.typing as npt
+from numba import njit
 from scipy.optimize import least_squares, leastsq
 
 from models.arrays import FloatArray
@@ -428,6 +429,55 @@ def _end_of_event_index(dvx_kmh: FloatArray, dvy_kmh: FloatArray, rate_hz: float
     return t0 + int(ended[0])
 
 
+@njit(cache=True, nogil=True)
+def _haversine_terms(pi_t: FloatArray, dur: float) -> tuple[FloatArray, FloatArray]:
+    """The phase ``pi t / T`` and ``sin(phase) ** 2`` at every sample (numpy's numbers:
+    the same division, the C library's sine as numpy's, the square a product)."""
+    n = pi_t.shape[0]
+    phase = np.empty(n)
+    sin2 = np.empty(n)
+    for i in range(n):
+        ph = pi_t[i] / dur
+        s = math.sin(ph)
+        phase[i] = ph
+        sin2[i] = s * s
+    return phase, sin2
+
+
+@njit(cache=True, nogil=True)
+def _haversine_residual(
+    t: FloatArray, a: FloatArray, sin2: FloatArray, amp: float, dur: float
+) -> FloatArray:
+    """``where(0 <= t <= T, A sin2, 0) - a``: the haversine less the data, g."""
+    n = t.shape[0]
+    out = np.empty(n)
+    for i in range(n):
+        if t[i] >= 0.0 and t[i] <= dur:
+            out[i] = amp * sin2[i] - a[i]
+        else:
+            out[i] = 0.0 - a[i]
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _haversine_jacobian(
+    t: FloatArray, phase: FloatArray, sin2: FloatArray, amp: float, dur: float
+) -> FloatArray:
+    """Columns ``sin2`` and ``-A phase / T sin(2 phase)`` on ``0 <= t <= T``, 0 outside,
+    in the order numpy evaluates the expressions, shape (n, 2)."""
+    n = t.shape[0]
+    jac = np.empty((n, 2))
+    neg_amp = -amp
+    for i in range(n):
+        if t[i] >= 0.0 and t[i] <= dur:
+            jac[i, 0] = sin2[i]
+            jac[i, 1] = neg_amp * phase[i] / dur * math.sin(2.0 * phase[i])
+        else:
+            jac[i, 0] = 0.0
+            jac[i, 1] = 0.0
+    return jac
+
+
 def _fit_haversine(t: FloatArray, a: FloatArray, delta_v_kmh: float) -> HaversineFit:
     """Least-squares haversine fit to the resultant ``a`` (g) on times ``t`` (s)."""
     peak = float(np.max(a))
@@ -441,31 +491,28 @@ def _fit_haversine(t: FloatArray, a: FloatArray, delta_v_kmh: float) -> Haversin
     t_guess = min(max(t_guess, 1.5 * t_lo), 0.99 * t_hi)
 
     # the terms of one duration, shared by the residual and the Jacobian at the same
-    # point (MINPACK asks for both there): the numbers of `haversine`, each computed once
+    # point (MINPACK asks for both there), each computed once (compiled loops:
+    # _haversine_terms, _haversine_residual, _haversine_jacobian)
     pi_t = np.pi * t
-    last: dict[float, tuple[npt.NDArray[np.bool_], FloatArray, FloatArray]] = {}
+    last: dict[float, tuple[FloatArray, FloatArray]] = {}
 
-    def terms(dur: float) -> tuple[npt.NDArray[np.bool_], FloatArray, FloatArray]:
+    def terms(dur: float) -> tuple[FloatArray, FloatArray]:
         if dur not in last:
-            phase = pi_t / dur
             last.clear()
-            last[dur] = ((t >= 0.0) & (t <= dur), phase, np.sin(phase) ** 2)
+            last[dur] = _haversine_terms(pi_t, dur)
         return last[dur]
 
     def residual(p: FloatArray) -> FloatArray:
-        inside, _, sin2 = terms(float(p[1]))
-        return np.where(inside, float(p[0]) * sin2, 0.0) - a  # haversine(t, A, T) - a
+        dur = float(p[1])
+        return _haversine_residual(t, a, terms(dur)[1], float(p[0]), dur)
 
     def jacobian(p: FloatArray) -> FloatArray:
         # d/dA and d/dT of A sin^2(pi t / T) on [0, T] (0 outside): sin^2(pi t / T)
         # and -A (pi t / T^2) sin(2 pi t / T). [R] exact derivatives instead of
         # scipy's two extra residuals per step: about half the fit time
-        amp, dur = float(p[0]), float(p[1])
-        inside, phase, sin2 = terms(dur)
-        jac = np.empty((t.size, 2))
-        jac[:, 0] = np.where(inside, sin2, 0.0)
-        jac[:, 1] = np.where(inside, -amp * phase / dur * np.sin(2.0 * phase), 0.0)
-        return jac
+        dur = float(p[1])
+        phase, sin2 = terms(dur)
+        return _haversine_jacobian(t, phase, sin2, float(p[0]), dur)
 
     x0 = np.array([peak, t_guess])
     scale = np.array([max(peak, 1.0), max(t_guess, step)])
