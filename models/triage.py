@@ -39,6 +39,7 @@ from models.field.model import FieldModel, FieldPrediction
 from models.field.model import load_default as load_field_model
 from models.impact_mode import ImpactClassification, ImpactMode, classify_impact
 from models.injury.assessment import InjuryMeasures
+from models.injury.batch_compiled import warm_up as _warm_up_p_iss
 from models.lpm.domain import POSTURE_RANGE_DEG, SEAT_TRACK_RANGE_MM, clamp
 from models.lpm.fingerprint import lpm_code_sha256, sources_sha256
 from models.lpm.params import ParameterSet, available_parameter_sets, load_parameter_set
@@ -401,9 +402,10 @@ def load_surrogates(directory: Path | None = None) -> SurrogateLibrary | None:
 
 def warm_up() -> None:
     """Compile (or load from the numba cache) every compiled loop of the request path:
-    the LPM kernels and measures, and the surrogates' loops."""
+    the LPM kernels and measures, the surrogates' loops and their P(ISS >= 15)."""
     _warm_up_lpm()
     _warm_up_surrogates()
+    _warm_up_p_iss()
 
 
 def load_engine_models(

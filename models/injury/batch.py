@@ -24,6 +24,9 @@ microseconds per call). This module computes the same numbers over arrays:
 Why hand-written: no library scores ISS; the scalar functions are the
 reference, and ``tests/injury/test_injury_batch.py`` holds the two paths equal
 (relative 1e-12) over random measures of every mode, body and age option.
+The request path runs the compiled form of the P(ISS >= t) part
+(:mod:`models.injury.batch_compiled`, held equal to this one bit for bit);
+this module stays its reference and serves the region blocks of ``assess``.
 """
 
 from __future__ import annotations
@@ -49,7 +52,6 @@ __all__ = [
     "MEASURE_NAMES",
     "p_iss_at_least_batch",
     "p_iss15_batch",
-    "p_iss15_batch_trusted",
     "region_blocks_checked",
     "region_cumulative_risk_batch",
 ]
@@ -326,9 +328,8 @@ def p_iss_at_least_batch(
     `threshold` (at most 75). The head and neck enter only through
     P(AIS >= k) at the levels k that the chest and abdomen levels leave to
     reach the threshold (:func:`_head_neck_at`), which saves the exponentials
-    of the other levels (the surrogate's request path calls this on about
-    15,000 sets); regions other than head and neck, chest and abdomen carry
-    no risk from the LPM measures.
+    of the other levels; regions other than head and neck, chest and abdomen
+    carry no risk from the LPM measures.
 
     Returns
     -------
@@ -340,24 +341,6 @@ def p_iss_at_least_batch(
         raise ValueError("`threshold` must be finite and at most 75")
     v, n = _values(values)
     return _p_iss_at_least(v, n, body, age_years, impact_mode, t)
-
-
-def p_iss15_batch_trusted(
-    values: Mapping[str, FloatArray],
-    body: Body,
-    age_years: float | None = None,
-    impact_mode: ImpactMode | str = ImpactMode.FRONTAL,
-) -> FloatArray:
-    """:func:`p_iss15_batch` of measures the caller guarantees: the same numbers.
-
-    For the surrogate's request path, whose measures come out of the inverse
-    output transforms (finite and non-negative by construction): each value
-    is a 1-D float64 array of one common size, finite and >= 0, and the names
-    are :data:`MEASURE_NAMES`. Nothing of this is checked here (the checks cost
-    a tenth of the call on the request path's 3,700 sets).
-    """
-    n = next(iter(values.values())).size if values else 0
-    return _p_iss_at_least(values, n, body, age_years, impact_mode, ISS_TRIAGE_THRESHOLD)
 
 
 def _p_iss_at_least(

@@ -33,6 +33,7 @@ MODEL_SOURCES = (
     "injury/scores.py",
     "injury/assessment.py",
     "injury/batch.py",
+    "injury/batch_compiled.py",
     "injury/measures.py",
 )
 

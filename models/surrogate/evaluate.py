@@ -98,8 +98,8 @@ EVALUATION_NAME: Final[str] = "PCE sensor-uncertainty propagation and interval c
 EVALUATION_VERSION: Final[str] = "7"
 
 
-#: Sources of the evaluation (the library, its families and pieces, and the batch
-#: risk they call).
+#: Sources of the evaluation (the library, its families and pieces, their compiled
+#: loops, and the batch risk they call).
 _EVALUATION_SOURCES: Final[tuple[Path, ...]] = (
     Path(__file__),
     Path(__file__).with_name("family_constants.py"),
@@ -107,7 +107,9 @@ _EVALUATION_SOURCES: Final[tuple[Path, ...]] = (
     Path(__file__).with_name("family.py"),
     Path(__file__).with_name("library.py"),
     Path(_batch_module.__file__),
+    Path(_batch_module.__file__).with_name("batch_compiled.py"),
     Path(__file__).with_name("kriging.py"),
+    Path(__file__).with_name("kernels.py"),
 )
 
 

@@ -17,7 +17,7 @@ from threadpoolctl import threadpool_limits  # type: ignore[import-untyped]
 
 from models.arrays import FloatArray, IntArray
 from models.impact_mode import ImpactMode
-from models.injury.batch import p_iss15_batch_trusted
+from models.injury.batch_compiled import p_iss15_trusted
 from models.notification import Body
 from models.surrogate.family_constants import (
     _MIN_CALIBRATION_POINTS,
@@ -197,7 +197,7 @@ class SurrogateFamily:
         shape = raw_measures.shape[1:]
         physical = measures_from_output_scale(self._measures, raw_measures)
         values = {name: physical[i].reshape(-1) for i, name in enumerate(self._measures)}
-        p = p_iss15_batch_trusted(values, self._body, age_years, self._mode)
+        p = p_iss15_trusted(values, self._body, age_years, self._mode)
         return np.asarray(p.reshape(shape), dtype=np.float64)
 
     def _raw_all(self, x: FloatArray) -> FloatArray:
