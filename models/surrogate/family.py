@@ -35,6 +35,7 @@ from models.surrogate.family_constants import (
     _bootstrap_sd,
     _sd_floor,
 )
+from models.surrogate.kernels import gather_p_sets, linear_percentiles
 from models.surrogate.pieces import _KrigedPiece, _Piece, _piece, _smoothstep, _SplitPiece
 from models.surrogate.spec import (
     INPUT_NAMES,
@@ -558,19 +559,16 @@ class SurrogateFamily:
         n_s = N_SENSOR_SAMPLES
         # one pass through the risk curves for both sets (each set's P is its own:
         # the batch is elementwise), [point PCE at every sample | replicates at the
-        # subset]: the subset's columns first (a copy of a sixth of `raw`), then the rows
-        both = np.concatenate(
-            (raw[mr, 0, 1:], raw[:, 1:, 1 + _P_SUBSET][mr].reshape(mr.size, -1)), axis=1
-        )
-        p_both = self._p_from_raw(both, age_years)
+        # subset], gathered from `raw` in one copy
+        p_both = self._p_from_raw(gather_p_sets(raw, mr, _P_SUBSET), age_years)
         p_point = p_both[:n_s]  # (n,)
         p_sub = np.empty((nb1, _P_SUBSET.size))  # (B + 1, n_sub)
         p_sub[0] = p_point[_P_SUBSET]
         p_sub[1:] = p_both[n_s:].reshape(nb1 - 1, _P_SUBSET.size)
         sub_means = p_sub.mean(axis=1)
-        means = np.clip(float(p_point.mean()) + (sub_means - sub_means[0]), 0.0, 1.0)
         p = float(p_point.mean())
-        lo, hi = np.percentile(means[1:], _PCT)
+        means = np.clip(p + (sub_means - sub_means[0]), 0.0, 1.0)
+        lo, hi = linear_percentiles(means[1:], _PCT)  # np.percentile's numbers
         g_lo, g_hi = to_output_scale("p_iss15", np.array([lo, hi]))
         c = 0.5 * (g_lo + g_hi)
         f = self.p_interval_inflation

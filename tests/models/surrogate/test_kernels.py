@@ -8,7 +8,13 @@ import numpy as np
 import pytest
 from scipy.sparse import csr_array
 
-from models.surrogate.kernels import grouped_coefficients, matern32_in_place, warm_up
+from models.surrogate.kernels import (
+    gather_p_sets,
+    grouped_coefficients,
+    linear_percentiles,
+    matern32_in_place,
+    warm_up,
+)
 
 
 @pytest.mark.parametrize("density", [0.0, 0.17, 1.0])
@@ -78,3 +84,31 @@ def test_univariate_rows_is_the_numpy_recurrence(degree: int) -> None:
     assert np.array_equal(evaluate_univariate(x, (alpha, beta), degree), rows.T)
     with pytest.raises(ValueError, match="coefficients"):
         evaluate_univariate(x, (alpha[:degree], beta[:degree]), degree)
+
+
+@pytest.mark.parametrize("transposed", [False, True])
+def test_gather_p_sets_is_the_numpy_gather(transposed: bool) -> None:
+    """The copy of the P sets equals numpy's fancy indexing, in either memory layout."""
+    rng = np.random.default_rng(5)
+    raw = (
+        rng.normal(size=(97, 6, 151)).transpose(1, 2, 0)
+        if transposed
+        else rng.normal(size=(6, 151, 97))
+    )
+    rows = np.array([0, 1, 2, 3, 5])
+    subset = np.arange(0, 96, 4)
+    reference = np.concatenate(
+        (raw[rows, 0, 1:], raw[:, 1:, 1 + subset][rows].reshape(rows.size, -1)), axis=1
+    )
+    assert np.array_equal(gather_p_sets(raw, rows, subset), reference)
+
+
+def test_linear_percentiles_are_numpy_percentile() -> None:
+    """Sizes 1 to 300, ties, the interval's (2.5, 97.5) and random percents, 0 and 100."""
+    rng = np.random.default_rng(8)
+    for trial in range(3000):
+        x = rng.normal(size=int(rng.integers(1, 301)))
+        if trial % 3 == 0:
+            x = np.round(x, 1)  # ties
+        percents = (2.5, 97.5) if trial % 2 else (0.0, *rng.uniform(0, 100, 3), 100.0)
+        assert np.array_equal(np.array(linear_percentiles(x, percents)), np.percentile(x, percents))
