@@ -62,7 +62,7 @@ import numpy as np
 import numpy.typing as npt
 
 from models.impact_mode import ImpactMode
-from models.injury.batch import region_blocks_checked
+from models.injury.batch_compiled import region_blocks_compiled
 from models.injury.measures import InjuryMeasures
 from models.injury.scores import (
     _NO_RISK,
@@ -160,7 +160,7 @@ def region_cumulative_risk(
     if not present:  # no evidence: no risk in any region
         return {region: np.zeros(MAX_AIS) for region in ISS_REGIONS}
     # one curve selection and combination for the scalar and the batch paths
-    blocks = region_blocks_checked(present, 1, body, age, mode)  # checked by _value
+    blocks = region_blocks_compiled(present, 1, body, age, mode)  # checked by _value
     return {region: np.ascontiguousarray(b[:, 0]) for region, b in blocks.items()}
 
 

@@ -24,9 +24,9 @@ microseconds per call). This module computes the same numbers over arrays:
 Why hand-written: no library scores ISS; the scalar functions are the
 reference, and ``tests/injury/test_injury_batch.py`` holds the two paths equal
 (relative 1e-12) over random measures of every mode, body and age option.
-The request path runs the compiled form of the P(ISS >= t) part
-(:mod:`models.injury.batch_compiled`, held equal to this one bit for bit);
-this module stays its reference and serves the region blocks of ``assess``.
+The request path runs the compiled form (:mod:`models.injury.batch_compiled`:
+the region blocks of ``assess`` and the surrogate's P(ISS >= t)), held equal
+to this module bit for bit; this module stays its reference.
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""P(ISS >= t) of many measure sets in one compiled pass: the request path's batch.
+"""Risk curves and P(ISS >= t) of measure sets in one compiled pass: the request path's.
 
 :func:`models.injury.batch.p_iss_at_least_batch` (numpy) is the reference:
 risk curves per measure, combined per region, regional AIS distributions,
@@ -43,10 +43,16 @@ from models.impact_mode import ImpactMode
 from models.injury import risk
 from models.injury.batch import _HIC_NESTED_TOP, _a_min
 from models.injury.criteria import CTI_INTERCEPTS
-from models.injury.scores import ISS_TRIAGE_THRESHOLD
+from models.injury.scores import ISS_REGIONS, ISS_TRIAGE_THRESHOLD, MAX_AIS
 from models.notification import Body
 
-__all__ = ["CurveInputs", "curve_inputs", "p_iss15_trusted", "p_iss_at_least_compiled"]
+__all__ = [
+    "CurveInputs",
+    "curve_inputs",
+    "p_iss15_trusted",
+    "p_iss_at_least_compiled",
+    "region_blocks_compiled",
+]
 
 _SIDE_MODES: Final[frozenset[ImpactMode]] = frozenset({ImpactMode.NEAR_SIDE, ImpactMode.FAR_SIDE})
 
@@ -173,22 +179,69 @@ def p_iss_at_least_compiled(inputs: CurveInputs, threshold: float) -> FloatArray
     -------
     ndarray, shape (n,)
     """
-    spec = inputs.spec
     return _p_iss_kernel(
         inputs.n,
         inputs.hic,
         inputs.nij,
         inputs.rows,
-        spec[:, 0].astype(np.int64),
-        spec[:, 1].astype(np.int64),
-        spec[:, 2].astype(np.int64),
-        np.ascontiguousarray(spec[:, 3]),
-        np.ascontiguousarray(spec[:, 4]),
+        *_columns(inputs.spec),
         _a_min(float(threshold)),
         _HIC_ALPHA,
         _HIC_BETA,
         _NIJ,
     )
+
+
+def _columns(
+    spec: FloatArray,
+) -> tuple[IntArray, IntArray, IntArray, FloatArray, FloatArray]:
+    """The curve table's columns: region, level, form (int) and alpha, beta."""
+    return (
+        spec[:, 0].astype(np.int64),
+        spec[:, 1].astype(np.int64),
+        spec[:, 2].astype(np.int64),
+        np.ascontiguousarray(spec[:, 3]),
+        np.ascontiguousarray(spec[:, 4]),
+    )
+
+
+#: Regions the LPM measures inform, in the order of the compiled blocks.
+_BLOCK_REGIONS: Final[tuple[str, ...]] = ("head_neck", "chest", "abdomen")
+
+
+def region_blocks_compiled(
+    values: Mapping[str, FloatArray],
+    n: int,
+    body: Body,
+    age_years: float | None = None,
+    impact_mode: ImpactMode | str = ImpactMode.FRONTAL,
+) -> dict[str, FloatArray]:
+    """``batch.region_blocks_checked``: the same numbers, in one compiled pass.
+
+    `values` as there (checked by the caller). Returns every region of
+    ``ISS_REGIONS``, each shape (6, n), row k - 1 P(AIS >= k); the regions the
+    measures do not inform are zeros. [R] one measure set (``assess``): 0.14
+    -> 0.04 ms in the request (measured 2026-12-05), the numpy path's hundred
+    array operations on one value each replaced by one call.
+    """
+    inputs = curve_inputs(values, n, body, age_years, impact_mode)
+    blocks = _region_blocks_kernel(
+        inputs.n,
+        inputs.hic,
+        inputs.nij,
+        inputs.rows,
+        *_columns(inputs.spec),
+        _HIC_ALPHA,
+        _HIC_BETA,
+        _NIJ,
+    )
+    out = {}
+    for region in ISS_REGIONS:
+        if region in _BLOCK_REGIONS:
+            out[region] = blocks[_BLOCK_REGIONS.index(region)]
+        else:
+            out[region] = np.zeros((MAX_AIS, inputs.n))
+    return out
 
 
 def p_iss15_trusted(
@@ -323,6 +376,81 @@ def _p_iss_kernel(
     return out
 
 
+@njit(cache=True, nogil=True, error_model="numpy")
+def _region_blocks_kernel(
+    n: int,
+    hic: FloatArray,
+    nij: FloatArray,
+    rows: FloatArray,
+    region: IntArray,
+    level: IntArray,
+    form: IntArray,
+    alpha: FloatArray,
+    beta: FloatArray,
+    hic_alpha: FloatArray,
+    hic_beta: FloatArray,
+    nij_table: FloatArray,
+) -> FloatArray:
+    """P(AIS >= k) of head and neck, chest and abdomen per set, shape (3, 6, n).
+
+    ``batch._regions`` set by set: the HIC curves at every level and the Nij
+    curves at theirs, each forced monotone (cumulative minimum up the levels),
+    then per level from AIS 6 down the running maximum of the curves that
+    publish it, clipped to [0, 1]; levels above a region's highest curve 0.
+    """
+    k_curves = rows.shape[0]
+    has_hic = hic.shape[0] > 0
+    has_nij = nij.shape[0] > 0
+    n_hic = hic_alpha.shape[0]
+    n_nij = nij_table.shape[0]
+    out = np.zeros((3, 6, n))
+    hic_c = np.empty(n_hic)
+    nij_c = np.empty(n_nij)
+    cv = np.empty(max(k_curves, 1))
+    for i in range(n):
+        if has_hic:
+            h = hic[i]
+            run = 2.0
+            for j in range(n_hic):
+                c = 0.0
+                if h > 0.0:
+                    c = _expit(hic_beta[j] * h - hic_alpha[j] - 200.0 / h)
+                run = c if j == 0 else min(run, c)
+                hic_c[j] = run
+        if has_nij:
+            for j in range(n_nij):
+                c = _expit(nij_table[j, 2] * nij[i] - nij_table[j, 1])
+                nij_c[j] = c if j == 0 else min(nij_c[j - 1], c)
+        have = False
+        run = -1.0
+        for lv in range(6, 0, -1):
+            if has_hic:
+                run = hic_c[lv - 1] if not have else max(run, hic_c[lv - 1])
+                have = True
+            if has_nij:
+                for j in range(n_nij):
+                    if int(nij_table[j, 0]) == lv:
+                        run = nij_c[j] if not have else max(run, nij_c[j])
+                        have = True
+            if have:
+                out[0, lv - 1, i] = min(max(run, 0.0), 1.0)
+        for j in range(k_curves):
+            x = rows[j, i]
+            z = beta[j] * x - alpha[j] if form[j] == _FORM_LOGISTIC else alpha[j] + beta[j] * x
+            cv[j] = _expit(z)
+        for r in range(2):
+            have = False
+            run = -1.0
+            for lv in range(6, 0, -1):
+                for j in range(k_curves):
+                    if region[j] == r and level[j] == lv:
+                        run = cv[j] if not have else max(run, cv[j])
+                        have = True
+                if have:
+                    out[1 + r, lv - 1, i] = min(max(run, 0.0), 1.0)
+    return out
+
+
 def warm_up() -> None:
     """Compile (or load from the numba cache) the pass."""
     inputs = curve_inputs(
@@ -333,3 +461,4 @@ def warm_up() -> None:
         ImpactMode.FRONTAL,
     )
     p_iss_at_least_compiled(inputs, ISS_TRIAGE_THRESHOLD)
+    region_blocks_compiled({"hic15": np.ones(1)}, 1, Body.MALE_50TH)

@@ -1,4 +1,4 @@
-"""The compiled P(ISS >= t) equals the numpy batch reference, bit for bit."""
+"""The compiled region blocks and P(ISS >= t) equal the numpy batch reference, bit for bit."""
 
 from __future__ import annotations
 
@@ -8,8 +8,18 @@ import numpy as np
 import pytest
 
 from models.impact_mode import ImpactMode
-from models.injury.batch import MEASURE_NAMES, p_iss15_batch, p_iss_at_least_batch
-from models.injury.batch_compiled import curve_inputs, p_iss15_trusted, p_iss_at_least_compiled
+from models.injury.batch import (
+    MEASURE_NAMES,
+    p_iss15_batch,
+    p_iss_at_least_batch,
+    region_blocks_checked,
+)
+from models.injury.batch_compiled import (
+    curve_inputs,
+    p_iss15_trusted,
+    p_iss_at_least_compiled,
+    region_blocks_compiled,
+)
 from models.notification import Body
 from tests.models.injury.test_injury_batch import MODE_MEASURES, SCALES, _random_measures
 
@@ -45,6 +55,15 @@ def test_compiled_equals_numpy_batch_bit_for_bit(
             assert np.array_equal(
                 p_iss15_trusted(v, body, age, mode), p_iss15_batch(v, body, age, mode)
             )
+        blocks = region_blocks_compiled(v, n, body, age, mode)
+        reference = region_blocks_checked(v, n, body, age, mode)
+        assert list(blocks) == list(reference)
+        for region, block in reference.items():
+            assert np.array_equal(blocks[region], block), (subset, region)
+        one = {k: x[:1] for k, x in v.items()}  # the assessment's single set
+        single = region_blocks_compiled(one, 1, body, age, mode)
+        for region, block in region_blocks_checked(one, 1, body, age, mode).items():
+            assert np.array_equal(single[region], block), (subset, region)
 
 
 def test_saturated_and_tiny_measures() -> None:
