@@ -67,7 +67,7 @@ from scipy.optimize import least_squares, leastsq
 
 from models.arrays import FloatArray
 from models.constants import G_MS2
-from models.injury.filters import cfc_filter
+from models.injury.filters import cfc_filter_rows
 from models.limits import (
     MAX_ABS_ACCELERATION_G,
     MAX_DELTA_V_KMH,
@@ -630,8 +630,8 @@ def _process_acceleration(pulse: AccelerationPulse, rate_hz: float) -> Processed
             "they must be the same length."
         )
     length = _check_record_duration("longitudinal_g", ax_raw.size, 1.0 / fs)
-    ax_f = cfc_filter(ax_raw, fs, PULSE_CFC)
-    ay_f = cfc_filter(ay_raw, fs, PULSE_CFC)
+    # both channels through the filter side by side: cfc_filter's numbers, row by row
+    ax_f, ay_f = cfc_filter_rows(np.vstack((ax_raw, ay_raw)), fs, PULSE_CFC)
     t_in = np.arange(ax_raw.size, dtype=np.float64) / fs
     t = _grid(length, rate_hz)
     ax = np.interp(t, t_in, ax_f)
