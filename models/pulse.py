@@ -81,6 +81,7 @@ from models.notification import AccelerationPulse, DeltaVPulse, Pulse, SummaryPu
 
 __all__ = [
     "PulseError",
+    "warm_up",
     "DEFAULT_HAVERSINE_DURATION_MS",
     "DEFAULT_OUTPUT_RATE_HZ",
     "EOE_DELTA_V_KMH",
@@ -759,3 +760,11 @@ def process_pulse(pulse: Pulse, output_rate_hz: float = DEFAULT_OUTPUT_RATE_HZ) 
     if isinstance(pulse, SummaryPulse):
         return _process_summary(pulse, rate)
     raise TypeError(f"`pulse` must be a pulse dataclass, got {type(pulse).__name__}.")
+
+
+def warm_up() -> None:
+    """Compile (or load from the numba cache) the haversine fit's loops."""
+    t = np.linspace(0.0, 0.01, 4)
+    phase, sin2 = _haversine_terms(np.pi * t, 0.01)
+    _haversine_residual(t, sin2, sin2, 1.0, 0.01)
+    _haversine_jacobian(t, phase, sin2, 1.0, 0.01)

@@ -54,6 +54,7 @@ from models.notification import (
     SeatTrackSource,
 )
 from models.pulse import ProcessedPulse, process_pulse
+from models.pulse import warm_up as _warm_up_pulse
 from models.risk_calibration import (
     CALIBRATION_NAME,
     CALIBRATION_VERSION,
@@ -402,7 +403,9 @@ def load_surrogates(directory: Path | None = None) -> SurrogateLibrary | None:
 
 def warm_up() -> None:
     """Compile (or load from the numba cache) every compiled loop of the request path:
-    the LPM kernels and measures, the surrogates' loops and their P(ISS >= 15)."""
+    the pulse fit, the LPM kernels and measures, the surrogates' loops and their
+    P(ISS >= 15)."""
+    _warm_up_pulse()
     _warm_up_lpm()
     _warm_up_surrogates()
     _warm_up_p_iss()
