@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
+from dataclasses import dataclass
 from typing import Final
 
 import numpy as np
@@ -66,6 +67,7 @@ _HIC_BETA: Final = np.array(risk.HIC_PRASAD_MERTZ_BETA)
 _NIJ: Final = np.array([[lv, *risk.NIJ_EPPINGER_1999[lv]] for lv in sorted(risk.NIJ_EPPINGER_1999)])
 
 
+@dataclass(frozen=True, slots=True)
 class CurveInputs:
     """The measure sets as the compiled pass reads them (see :func:`curve_inputs`).
 
@@ -81,16 +83,11 @@ class CurveInputs:
         Number of sets.
     """
 
-    __slots__ = ("hic", "n", "nij", "rows", "spec")
-
-    def __init__(
-        self, hic: FloatArray, nij: FloatArray, rows: FloatArray, spec: FloatArray, n: int
-    ) -> None:
-        self.hic = hic
-        self.nij = nij
-        self.rows = rows
-        self.spec = spec
-        self.n = n
+    hic: FloatArray
+    nij: FloatArray
+    rows: FloatArray
+    spec: FloatArray
+    n: int
 
 
 def _vc_spec(vc25: float) -> tuple[float, float]:
