@@ -22,6 +22,7 @@ from numba import njit
 from models.arrays import FloatArray, IntArray
 
 __all__ = [
+    "add_correction",
     "gather_p_sets",
     "grouped_coefficients",
     "linear_percentiles",
@@ -197,6 +198,36 @@ def gather_p_sets(raw: FloatArray, rows: IntArray, subset: IntArray) -> FloatArr
     return out
 
 
+@njit(cache=True, nogil=True)
+def add_correction(out: FloatArray, corr: FloatArray) -> None:
+    """``out += corr.T[:, None, :]`` in place, in the order `out` lies in memory.
+
+    Parameters
+    ----------
+    out : ndarray, shape (n_out, B + 1, n)
+        Fitted-scale outputs of every replicate (any strides: the transpose of
+        a product, its samples' axis outermost, or C order).
+    corr : ndarray, shape (n, n_out)
+        The correction at each sample, the same for every replicate.
+
+    Each element gets the same single addition as numpy's broadcast; numpy
+    walks the broadcast operand's strides instead. [R] 6 x 151 x 97: 45 ->
+    about 25 us (measured 2026-12-05).
+    """
+    n_out, nb1, n = out.shape
+    if out.strides[2] > out.strides[1]:  # samples outermost in memory
+        for s in range(n):
+            for o in range(n_out):
+                c = corr[s, o]
+                for b in range(nb1):
+                    out[o, b, s] += c
+    else:
+        for o in range(n_out):
+            for b in range(nb1):
+                for s in range(n):
+                    out[o, b, s] += corr[s, o]
+
+
 def linear_percentiles(x: FloatArray, percents: tuple[float, ...]) -> tuple[float, ...]:
     """``np.percentile(x, percents)`` of finite 1-D `x` (the default linear method).
 
@@ -233,3 +264,4 @@ def warm_up() -> None:
     matern32_in_place(np.zeros((1, 1)), np.zeros(1), np.zeros(1))
     univariate_rows(np.zeros(1), np.zeros(2), np.ones(2), 1)
     gather_p_sets(np.zeros((1, 2, 2)), np.zeros(1, dtype=np.int64), np.zeros(1, dtype=np.int64))
+    add_correction(np.zeros((1, 1, 1)), np.zeros((1, 1)))

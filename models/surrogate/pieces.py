@@ -17,7 +17,7 @@ import numpy.typing as npt
 from models.arrays import FloatArray, IntArray
 from models.surrogate.basis import design_matrix, evaluate_univariate, evaluate_univariate_at
 from models.surrogate.family_constants import _POSTURE, _SEAT
-from models.surrogate.kernels import grouped_coefficients
+from models.surrogate.kernels import add_correction, grouped_coefficients
 from models.surrogate.kriging import ResidualKriging
 from models.surrogate.spec import (
     HEAD_CLEARANCE,
@@ -421,7 +421,7 @@ class _KrigedPiece:
         pts[:, _POSTURE] = post
         pts[:, _SEAT] = seat
         out = self.base.samples(xc, post, seat)  # a fresh array: corrected in place
-        out += self.correction(pts).T[:, None, :]
+        add_correction(out, self.correction(pts))  # out += correction.T[:, None, :]
         return out
 
 

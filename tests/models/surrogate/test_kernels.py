@@ -9,6 +9,7 @@ import pytest
 from scipy.sparse import csr_array
 
 from models.surrogate.kernels import (
+    add_correction,
     gather_p_sets,
     grouped_coefficients,
     linear_percentiles,
@@ -112,3 +113,17 @@ def test_linear_percentiles_are_numpy_percentile() -> None:
             x = np.round(x, 1)  # ties
         percents = (2.5, 97.5) if trial % 2 else (0.0, *rng.uniform(0, 100, 3), 100.0)
         assert np.array_equal(np.array(linear_percentiles(x, percents)), np.percentile(x, percents))
+
+
+@pytest.mark.parametrize("transposed", [False, True])
+def test_add_correction_is_the_broadcast_add(transposed: bool) -> None:
+    rng = np.random.default_rng(9)
+    out = (
+        rng.normal(size=(97, 6, 151)).transpose(1, 2, 0)
+        if transposed
+        else rng.normal(size=(6, 151, 97))
+    )
+    corr = rng.normal(size=(97, 6)) * 1e-3
+    expected = out + corr.T[:, None, :]
+    add_correction(out, corr)
+    assert np.array_equal(out, expected)
