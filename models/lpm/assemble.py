@@ -797,8 +797,15 @@ def _finish(
     info: dict[str, float],
 ) -> Model:
     rows = []
-    for c in contacts:
-        pos = _point(q0, ll, c.k_body, c.p, c.r)
+    # every contact point at rest in one call (the numbers of _point for each)
+    at_rest = K.points_at_rest(
+        q0,
+        ll,
+        np.array([c.k_body for c in contacts], dtype=np.int64),
+        np.array([c.p for c in contacts], dtype=np.float64),
+        np.array([c.r for c in contacts], dtype=np.float64),
+    ).tolist()
+    for c, pos in zip(contacts, at_rest, strict=True):
         ex, ez = c.b[0] - c.a[0], c.b[1] - c.a[1]
         side = 1.0 if (-ez * (pos[0] - c.a[0]) + ex * (pos[1] - c.a[1])) >= 0.0 else -1.0
         length = math.hypot(ex, ez)

@@ -71,6 +71,7 @@ __all__ = [
     "integrate_rk4",
     "integrate_se",
     "kin",
+    "points_at_rest",
     "rhs",
     "rhs_into",
 ]
@@ -371,6 +372,44 @@ def kin_sc(
         ddx += 2.0 * bd * qd[5] * qd[top] * s
         ddz += 2.0 * bd * qd[5] * qd[top] * c
     return px, pz, ddx, ddz
+
+
+@njit(cache=True, error_model="numpy")
+def points_at_rest(
+    q: np.ndarray, ll: np.ndarray, ks: np.ndarray, ps: np.ndarray, rs: np.ndarray
+) -> np.ndarray:
+    """Positions of several body points at rest (:func:`kin` of each, its numbers).
+
+    Parameters
+    ----------
+    q : ndarray, shape (6,)
+        Coordinates.
+    ll : ndarray, shape (5,)
+        Link lengths, m.
+    ks : ndarray of int64, shape (m,)
+        Body of each point (see :func:`kin_sc`).
+    ps, rs : ndarray, shape (m,)
+        Point coordinates on their bodies, m.
+
+    Returns
+    -------
+    ndarray, shape (m, 2)
+        x and z of each point, m; the link sines and cosines computed once.
+    """
+    sn = np.zeros(NQ)
+    cs = np.zeros(NQ)
+    for j in range(1, 5):
+        sn[j] = math.sin(q[j])
+        cs[j] = math.cos(q[j])
+    qd = np.zeros(NQ)
+    jx = np.zeros(NQ)
+    jz = np.zeros(NQ)
+    out = np.empty((ks.shape[0], 2))
+    for i in range(ks.shape[0]):
+        px, pz, _, _ = kin_sc(q, qd, ll, sn, cs, ks[i], ps[i], rs[i], jx, jz, 1.0)
+        out[i, 0] = px
+        out[i, 1] = pz
+    return out
 
 
 @njit(cache=True, inline="always", error_model="numpy")

@@ -13,6 +13,7 @@ import numpy as np
 import pytest
 
 from models.impact_mode import ImpactMode
+from models.lpm import kernel as K
 from models.lpm.params import ParameterSet
 from models.lpm.pulses import haversine_pulse, ncap_frontal_pulse, side_pulse
 from models.lpm.simulate import _result, _run_kernel, prepare, simulate, simulate_reference
@@ -86,3 +87,20 @@ def test_stacked_cfc_filter_is_bit_identical_to_cfc_filter(cfc: int) -> None:
     stacked = _filtered_stack(rows, 1e4, cfc)
     for i, x in enumerate(rows):
         assert np.array_equal(stacked[i], cfc_filter(x, 1e4, cfc))
+
+
+def test_points_at_rest_are_kin_of_each_point() -> None:
+    """The batch of contact points at rest equals the kernel's kinematics point by point."""
+    rng = np.random.default_rng(4)
+    ll = rng.uniform(0.05, 0.4, 5)
+    for _ in range(20):
+        q = np.concatenate(
+            [rng.normal(0.0, 0.05, 1), rng.normal(0.0, 0.6, 4), rng.uniform(0, 0.05, 1)]
+        )
+        ks = rng.integers(0, 7, 12).astype(np.int64)
+        ps, rs = rng.normal(0.0, 0.2, 12), rng.normal(0.0, 0.1, 12)
+        out = K.points_at_rest(q, ll, ks, ps, rs)
+        for i in range(ks.size):
+            jx, jz = np.zeros(K.NQ), np.zeros(K.NQ)
+            px, pz, _, _ = K.kin(q, np.zeros(K.NQ), ll, int(ks[i]), ps[i], rs[i], jx, jz, 1.0)
+            assert (out[i, 0], out[i, 1]) == (px, pz)
