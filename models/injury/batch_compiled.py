@@ -63,8 +63,15 @@ _FORM_INTERCEPT: Final[int] = 1  # z = alpha + beta x (the age-dependent chest c
 
 _HIC_ALPHA: Final = np.array(risk.HIC_PRASAD_MERTZ_ALPHA)
 _HIC_BETA: Final = np.array(risk.HIC_PRASAD_MERTZ_BETA)
+#: The 200/HIC term's constant of the Prasad/Mertz curves (risk, [S]).
+_HIC_HYPERBOLIC: Final[float] = risk._PRASAD_MERTZ_HYPERBOLIC
 #: Eppinger Nij levels 2..5 as rows (level, alpha, beta), increasing level.
 _NIJ: Final = np.array([[lv, *risk.NIJ_EPPINGER_1999[lv]] for lv in sorted(risk.NIJ_EPPINGER_1999)])
+
+#: The chest and abdomen curves as the kernels take them (:meth:`CurveInputs.curves`).
+_Curves = tuple[
+    FloatArray, IntArray, FloatArray, FloatArray, IntArray, IntArray, IntArray, IntArray
+]
 
 
 @dataclass(frozen=True, slots=True)
@@ -77,8 +84,17 @@ class CurveInputs:
         Empty when the measure is absent.
     rows : ndarray, shape (k, n)
         The argument ``x`` of each chest and abdomen curve.
-    spec : ndarray, shape (k, 5)
-        Per curve: region (0 chest, 1 abdomen), AIS level, form, alpha, beta.
+    region, level, form : ndarray of int64, shape (k,)
+        Per curve: region (0 chest, 1 abdomen), AIS level, form of its argument.
+    alpha, beta : ndarray, shape (k,)
+        Per curve: the logistic's coefficients.
+    order : ndarray of int64, shape (k,)
+        The curves by region, then from the highest level down: each region's
+        running maximum takes them in one sweep, region r's are
+        ``order[first[r]:first[r + 1]]``.
+    first : ndarray of int64, shape (3,)
+    top : ndarray of int64, shape (2,)
+        Each region's highest level (0: no curve).
     n : int
         Number of sets.
     """
@@ -86,8 +102,28 @@ class CurveInputs:
     hic: FloatArray
     nij: FloatArray
     rows: FloatArray
-    spec: FloatArray
+    region: IntArray
+    level: IntArray
+    form: IntArray
+    alpha: FloatArray
+    beta: FloatArray
+    order: IntArray
+    first: IntArray
+    top: IntArray
     n: int
+
+    def curves(self) -> _Curves:
+        """The chest and abdomen curves as the kernels take them."""
+        return (
+            self.rows,
+            self.form,
+            self.alpha,
+            self.beta,
+            self.level,
+            self.order,
+            self.first,
+            self.top,
+        )
 
 
 def _vc_spec(vc25: float) -> tuple[float, float]:
@@ -153,13 +189,27 @@ def curve_inputs(
         spec.append(
             (0, 3, _FORM_LOGISTIC, risk.CTI_KLEINBERGER_1998_ALPHA, risk.CTI_KLEINBERGER_1998_BETA)
         )
+    table = np.array(spec, dtype=np.float64).reshape(len(spec), 5)
+    region = table[:, 0].astype(np.int64)
+    level = table[:, 1].astype(np.int64)
+    top = np.zeros(2, dtype=np.int64)
+    for r, lv in zip(region.tolist(), level.tolist(), strict=True):
+        top[r] = max(top[r], lv)
+    first = np.array([0, np.count_nonzero(region == 0), region.size], dtype=np.int64)
     empty = np.empty(0)
     return CurveInputs(
-        values.get("hic15", empty),
-        values.get("nij", empty),
-        np.array(rows, dtype=np.float64).reshape(len(rows), n),
-        np.array(spec, dtype=np.float64).reshape(len(spec), 5),
-        n,
+        hic=values.get("hic15", empty),
+        nij=values.get("nij", empty),
+        rows=np.array(rows, dtype=np.float64).reshape(len(rows), n),
+        region=region,
+        level=level,
+        form=table[:, 2].astype(np.int64),
+        alpha=np.ascontiguousarray(table[:, 3]),
+        beta=np.ascontiguousarray(table[:, 4]),
+        order=np.argsort(region * 8 - level, kind="stable").astype(np.int64),
+        first=first,
+        top=top,
+        n=n,
     )
 
 
@@ -177,28 +227,7 @@ def p_iss_at_least_compiled(inputs: CurveInputs, threshold: float) -> FloatArray
     ndarray, shape (n,)
     """
     return _p_iss_kernel(
-        inputs.n,
-        inputs.hic,
-        inputs.nij,
-        inputs.rows,
-        *_columns(inputs.spec),
-        _a_min(float(threshold)),
-        _HIC_ALPHA,
-        _HIC_BETA,
-        _NIJ,
-    )
-
-
-def _columns(
-    spec: FloatArray,
-) -> tuple[IntArray, IntArray, IntArray, FloatArray, FloatArray]:
-    """The curve table's columns: region, level, form (int) and alpha, beta."""
-    return (
-        spec[:, 0].astype(np.int64),
-        spec[:, 1].astype(np.int64),
-        spec[:, 2].astype(np.int64),
-        np.ascontiguousarray(spec[:, 3]),
-        np.ascontiguousarray(spec[:, 4]),
+        inputs.n, inputs.hic, inputs.nij, inputs.curves(), _a_min(float(threshold))
     )
 
 
@@ -222,16 +251,7 @@ def region_blocks_compiled(
     array operations on one value each replaced by one call.
     """
     inputs = curve_inputs(values, n, body, age_years, impact_mode)
-    blocks = _region_blocks_kernel(
-        inputs.n,
-        inputs.hic,
-        inputs.nij,
-        inputs.rows,
-        *_columns(inputs.spec),
-        _HIC_ALPHA,
-        _HIC_BETA,
-        _NIJ,
-    )
+    blocks = _region_blocks_kernel(inputs.n, inputs.hic, inputs.nij, inputs.curves())
     out = {}
     for region in ISS_REGIONS:
         if region in _BLOCK_REGIONS:
@@ -265,74 +285,75 @@ def _expit(z: float) -> float:
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _hic_level(h: float, k: int, alpha: FloatArray, beta: FloatArray) -> float:
-    """The Prasad/Mertz curve at level k, forced monotone (risk.hic_prasad_mertz_1999)."""
+def _hic_curve(h: float, j: int) -> float:
+    """The published Prasad/Mertz curve of level j + 1 at HIC `h` (0 at HIC <= 0)."""
     if not h > 0.0:
         return 0.0
-    hyper = 200.0 / h
+    return _expit(_HIC_BETA[j] * h - _HIC_ALPHA[j] - _HIC_HYPERBOLIC / h)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _hic_level(h: float, k: int) -> float:
+    """The Prasad/Mertz curve at level k, forced monotone (risk.hic_prasad_mertz_1999)."""
     if k <= _HIC_NESTED_TOP:
-        return _expit(beta[k - 1] * h - alpha[k - 1] - hyper)
+        return _hic_curve(h, k - 1)
     run = 2.0
     for j in range(k):
-        c = _expit(beta[j] * h - alpha[j] - hyper)
-        if c < run:
-            run = c
+        run = min(run, _hic_curve(h, j))
     return run
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _nij_curve(x: float, j: int) -> float:
+    """The published Eppinger curve of row j of :data:`_NIJ` at Nij `x`."""
+    return _expit(_NIJ[j, 2] * x - _NIJ[j, 1])
+
+
+@njit(cache=True, nogil=True, inline="always")
+def _region_cumulative(i: int, curves: _Curves, cv: FloatArray, cum: FloatArray) -> None:
+    """P(AIS >= level) of chest (row 0) and abdomen (row 1) of set `i` into `cum`.
+
+    Per curve its logistic (into the workspace `cv`), then per region from its
+    highest level down the running maximum of the curves that publish each
+    level, clipped to [0, 1] (``batch._combine``); levels above a region's top
+    are not written.
+    """
+    rows, form, alpha, beta, level, order, first, top = curves
+    for j in range(rows.shape[0]):
+        x = rows[j, i]
+        z = beta[j] * x - alpha[j] if form[j] == _FORM_LOGISTIC else alpha[j] + beta[j] * x
+        cv[j] = _expit(z)
+    for r in range(2):
+        run = -1.0  # below every curve value (each in [0, 1])
+        pos = first[r]
+        for lv in range(top[r], 0, -1):
+            while pos < first[r + 1] and level[order[pos]] == lv:
+                run = max(run, cv[order[pos]])
+                pos += 1
+            cum[r, lv] = min(max(run, 0.0), 1.0)
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
 def _p_iss_kernel(
-    n: int,
-    hic: FloatArray,
-    nij: FloatArray,
-    rows: FloatArray,
-    region: IntArray,
-    level: IntArray,
-    form: IntArray,
-    alpha: FloatArray,
-    beta: FloatArray,
-    a_min: IntArray,
-    hic_alpha: FloatArray,
-    hic_beta: FloatArray,
-    nij_table: FloatArray,
+    n: int, hic: FloatArray, nij: FloatArray, curves: _Curves, a_min: IntArray
 ) -> FloatArray:
-    """The pass over the sets (see the module notes); `region` .. `beta` per curve."""
-    k_curves = rows.shape[0]
+    """The pass over the sets (see the module notes)."""
+    top = curves[7]
     has_hic = hic.shape[0] > 0
     has_nij = nij.shape[0] > 0
-    # the curves by region, then by level from the highest down (the same order for
-    # every set): each region's running maximum takes them in one sweep
-    order = np.argsort(region * 8 - level, kind="mergesort")
-    top = np.zeros(2, dtype=np.int64)
-    first = np.zeros(3, dtype=np.int64)  # region r's curves: order[first[r]:first[r + 1]]
-    for j in range(k_curves):
-        top[region[j]] = max(top[region[j]], level[j])
-        if region[j] == 0:
-            first[1] += 1
-    first[2] = k_curves
     out = np.empty(n)
-    cv = np.empty(max(k_curves, 1))
+    cv = np.empty(max(curves[0].shape[0], 1))
     cum = np.zeros((2, 8))  # P(AIS >= level) per region
     dist = np.zeros((2, 7))  # P(AIS = level) per region
     head = np.empty(7)
-    nij_mono = np.empty(nij_table.shape[0])
+    nij_mono = np.empty(_NIJ.shape[0])
     for i in range(n):
-        for j in range(k_curves):
-            x = rows[j, i]
-            z = beta[j] * x - alpha[j] if form[j] == _FORM_LOGISTIC else alpha[j] + beta[j] * x
-            cv[j] = _expit(z)
+        _region_cumulative(i, curves, cv, cum)
         for r in range(2):
             t = top[r]
             if t == 0:
                 dist[r, 0] = 1.0
                 continue
-            run = -1.0  # below every curve value (each in [0, 1])
-            pos = first[r]
-            for lv in range(t, 0, -1):
-                while pos < first[r + 1] and level[order[pos]] == lv:
-                    run = max(run, cv[order[pos]])
-                    pos += 1
-                cum[r, lv] = min(max(run, 0.0), 1.0)
             dist[r, 0] = max(1.0 - cum[r, 1], 0.0)
             for lv in range(1, t):
                 dist[r, lv] = max(cum[r, lv] - cum[r, lv + 1], 0.0)
@@ -356,15 +377,15 @@ def _p_iss_kernel(
                 if head[k] < 0.0:
                     v = 0.0
                     if has_hic:
-                        v = max(v, _hic_level(hic[i], k, hic_alpha, hic_beta))
+                        v = max(v, _hic_level(hic[i], k))
                     if has_nij:
                         # the monotone Nij curves at their first published level >= k
-                        for j in range(nij_table.shape[0]):
+                        for j in range(_NIJ.shape[0]):
                             if j >= nij_done:
-                                cj = _expit(nij_table[j, 2] * nij[i] - nij_table[j, 1])
+                                cj = _nij_curve(nij[i], j)
                                 nij_mono[j] = cj if j == 0 else min(nij_mono[j - 1], cj)
                                 nij_done = j + 1
-                            if nij_table[j, 0] >= k:
+                            if _NIJ[j, 0] >= k:
                                 v = max(v, nij_mono[j])
                                 break
                     head[k] = min(v, 1.0)
@@ -374,20 +395,7 @@ def _p_iss_kernel(
 
 
 @njit(cache=True, nogil=True, error_model="numpy")
-def _region_blocks_kernel(
-    n: int,
-    hic: FloatArray,
-    nij: FloatArray,
-    rows: FloatArray,
-    region: IntArray,
-    level: IntArray,
-    form: IntArray,
-    alpha: FloatArray,
-    beta: FloatArray,
-    hic_alpha: FloatArray,
-    hic_beta: FloatArray,
-    nij_table: FloatArray,
-) -> FloatArray:
+def _region_blocks_kernel(n: int, hic: FloatArray, nij: FloatArray, curves: _Curves) -> FloatArray:
     """P(AIS >= k) of head and neck, chest and abdomen per set, shape (3, 6, n).
 
     ``batch._regions`` set by set: the HIC curves at every level and the Nij
@@ -395,28 +403,25 @@ def _region_blocks_kernel(
     then per level from AIS 6 down the running maximum of the curves that
     publish it, clipped to [0, 1]; levels above a region's highest curve 0.
     """
-    k_curves = rows.shape[0]
+    top = curves[7]
     has_hic = hic.shape[0] > 0
     has_nij = nij.shape[0] > 0
-    n_hic = hic_alpha.shape[0]
-    n_nij = nij_table.shape[0]
+    n_hic = _HIC_ALPHA.shape[0]
+    n_nij = _NIJ.shape[0]
     out = np.zeros((3, 6, n))
     hic_c = np.empty(n_hic)
     nij_c = np.empty(n_nij)
-    cv = np.empty(max(k_curves, 1))
+    cv = np.empty(max(curves[0].shape[0], 1))
+    cum = np.zeros((2, 8))
     for i in range(n):
         if has_hic:
-            h = hic[i]
             run = 2.0
             for j in range(n_hic):
-                c = 0.0
-                if h > 0.0:
-                    c = _expit(hic_beta[j] * h - hic_alpha[j] - 200.0 / h)
-                run = c if j == 0 else min(run, c)
+                run = min(run, _hic_curve(hic[i], j))
                 hic_c[j] = run
         if has_nij:
             for j in range(n_nij):
-                c = _expit(nij_table[j, 2] * nij[i] - nij_table[j, 1])
+                c = _nij_curve(nij[i], j)
                 nij_c[j] = c if j == 0 else min(nij_c[j - 1], c)
         have = False
         run = -1.0
@@ -426,25 +431,15 @@ def _region_blocks_kernel(
                 have = True
             if has_nij:
                 for j in range(n_nij):
-                    if int(nij_table[j, 0]) == lv:
+                    if int(_NIJ[j, 0]) == lv:
                         run = nij_c[j] if not have else max(run, nij_c[j])
                         have = True
             if have:
                 out[0, lv - 1, i] = min(max(run, 0.0), 1.0)
-        for j in range(k_curves):
-            x = rows[j, i]
-            z = beta[j] * x - alpha[j] if form[j] == _FORM_LOGISTIC else alpha[j] + beta[j] * x
-            cv[j] = _expit(z)
+        _region_cumulative(i, curves, cv, cum)
         for r in range(2):
-            have = False
-            run = -1.0
-            for lv in range(6, 0, -1):
-                for j in range(k_curves):
-                    if region[j] == r and level[j] == lv:
-                        run = cv[j] if not have else max(run, cv[j])
-                        have = True
-                if have:
-                    out[1 + r, lv - 1, i] = min(max(run, 0.0), 1.0)
+            for lv in range(1, top[r] + 1):
+                out[1 + r, lv - 1, i] = cum[r, lv]
     return out
 
 

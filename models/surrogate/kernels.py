@@ -25,7 +25,6 @@ __all__ = [
     "add_correction",
     "gather_p_sets",
     "grouped_coefficients",
-    "linear_percentiles",
     "matern32_in_place",
     "univariate_rows",
     "warm_up",
@@ -226,35 +225,6 @@ def add_correction(out: FloatArray, corr: FloatArray) -> None:
             for b in range(nb1):
                 for s in range(n):
                     out[o, b, s] += corr[s, o]
-
-
-def linear_percentiles(x: FloatArray, percents: tuple[float, ...]) -> tuple[float, ...]:
-    """``np.percentile(x, percents)`` of finite 1-D `x` (the default linear method).
-
-    The same numbers, bit for bit: numpy's virtual index ``(n - 1) q``, its
-    neighbours and its interpolation ``a + (b - a) g`` (``b - (b - a)(1 - g)``
-    from ``g = 0.5`` up), in Python floats, which are numpy's doubles. Why
-    written out: ``np.percentile`` spends about 25 us on two percentiles of
-    150 values in its general machinery (measured 2026-12-05); held equal to it
-    by tests/models/surrogate/test_kernels.py.
-    """
-    s = np.sort(x)
-    n = s.size
-    out = []
-    for pct in percents:
-        vi = (n - 1) * (pct / 100)
-        if vi >= n - 1:
-            out.append(float(s[-1]))
-            continue
-        if vi < 0:
-            out.append(float(s[0]))
-            continue
-        prev = math.floor(vi)
-        a, b = float(s[prev]), float(s[prev + 1])
-        g = vi - prev
-        diff = b - a
-        out.append(b - diff * (1 - g) if g >= 0.5 else a + diff * g)
-    return tuple(out)
 
 
 def warm_up() -> None:

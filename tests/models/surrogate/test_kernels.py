@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 from scipy.sparse import csr_array
 
+from models.surrogate.family import linear_percentiles
 from models.surrogate.kernels import (
     add_correction,
     gather_p_sets,
     grouped_coefficients,
-    linear_percentiles,
     matern32_in_place,
     warm_up,
 )
