@@ -14,6 +14,7 @@ Commands::
     aacn-triage baseline fit [--data CSV] [--out JSON]
     aacn-triage fit-field [--out DIR] [--artifact JSON] [--cache DIR]
     aacn-triage evaluate FILE [--labels LABELS] [--out DIR] [--operating-point NAME]
+    aacn-triage cases rescore --model VERSION [--out FILE.csv] [--operating-point NAME]
 """
 
 from __future__ import annotations
@@ -162,6 +163,58 @@ def _cmd_keys(args: argparse.Namespace) -> int:
                 f"{key.id}\t{key.name}\t{key.role}\t{key.key_prefix}...\t{state}\t{key.created_at}"
             )
     return 0
+
+
+def _cmd_cases(args: argparse.Namespace) -> int:
+    """``cases rescore``: the stored cases whose decision another field model would change."""
+    from tqdm import tqdm
+
+    from models.field.model import artifact_for_version
+    from service.context import engine_models_for
+    from service.rescore import rescore, write_csv
+
+    try:
+        artifact = artifact_for_version(args.model)
+    except LookupError as exc:
+        _print(f"error: {exc}", err=True)
+        return 2
+    settings = _settings()
+    overrides: dict[str, Any] = {"field_artifact": artifact}
+    if args.operating_point is not None:
+        overrides["operating_point"] = args.operating_point
+    try:
+        models = engine_models_for(settings.model_copy(update=overrides))
+    except ValueError as exc:
+        _print(f"error: {exc}", err=True)
+        return 2
+    sessions = _sessions()
+    with tqdm(desc="cases rescored", unit="case", file=sys.stderr) as bar:
+        report = rescore(sessions, models, progress=bar.update)
+    changed = report.changed
+    out = write_csv(report.rows if args.all else changed, Path(args.out))
+    _print(
+        "case_id\tevent_id\treceived_at\told_model\told_p\told_decision\tnew_model\tnew_p"
+        "\tnew_decision"
+    )
+    for r in changed:
+        _print(
+            f"{r.case_id}\t{r.event_id}\t{r.received_at.isoformat()}\t{r.old_model}\t"
+            f"{r.old_probability:.4f}\t{_decision(r.old_decision)}\t{r.new_model}\t"
+            f"{r.new_probability:.4f}\t{_decision(r.new_decision)}"
+        )
+    _print(
+        f"{report.cases} stored cases, {len(report.rows)} run again with {report.new_model}: "
+        f"{len(changed)} decisions change ({report.up} to trauma center, {report.down} away "
+        f"from it); {len(report.refused)} refused; stored records unchanged; CSV: {out}",
+        err=True,
+    )
+    for case_id, reason in report.refused:
+        _print(f"refused: {case_id}: {reason}", err=True)
+    return 0
+
+
+def _decision(flagged: bool) -> str:
+    return "ISS15+" if flagged else "not ISS15+"
 
 
 def _problem_from_validation(exc: ValidationError) -> dict[str, Any]:
@@ -603,6 +656,23 @@ def build_parser() -> argparse.ArgumentParser:
     ev.add_argument("--operating-point", help="field model operating point (default: its own)")
     ev.add_argument("--workers", type=int, help="processes (default: the CPU count)")
     ev.set_defaults(func=_cmd_evaluate)
+
+    cases = sub.add_parser("cases", help="stored cases (operator commands on the database)")
+    cases_sub = cases.add_subparsers(dest="cases_command", required=True)
+    resc = cases_sub.add_parser(
+        "rescore",
+        help="list the stored cases whose decision another field model version would change "
+        "(model recall report; stored records are not altered)",
+    )
+    resc.add_argument("--model", required=True, help="field model version, e.g. 2.0.0")
+    resc.add_argument(
+        "--out", default="rescore.csv", help="CSV of the changed cases (default rescore.csv)"
+    )
+    resc.add_argument("--all", action="store_true", help="write every case to the CSV")
+    resc.add_argument(
+        "--operating-point", help="operating point (default AACN_OPERATING_POINT or the model's)"
+    )
+    cases.set_defaults(func=_cmd_cases)
 
     for command, (_, text) in _HANDED_OVER.items():
         handed = sub.add_parser(command, help=text, add_help=False)

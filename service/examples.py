@@ -13,14 +13,14 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
     "received_at": "2026-11-23T08:15:31Z",
     "triage": {
         "iss15_plus": True,
-        "probability": 0.6238,
-        "probability_ci95": [0.307, 0.8612],
-        "threshold": 0.0382,
+        "probability": 0.1357,
+        "probability_ci95": [0.08086, 0.219],
+        "threshold": 0.03407,
         "recommendation": "Transport to a Level I trauma center: vehicle telemetry "
         "consistent with severe injury (ISS 15 or more likely).",
         "outcome": "MAIS3+",
-        "model": "field_mais3@1.0.0",
-        "operating_point": "sens80",
+        "model": "field_mais3@2.0.0",
+        "operating_point": "sens80_per_mode",
     },
     "occupants": [
         {
@@ -66,15 +66,15 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
             },
             "triage": {
                 "iss15_plus": True,
-                "probability": 0.6238,
-                "probability_ci95": [0.307, 0.8612],
-                "threshold": 0.0382,
+                "probability": 0.1357,
+                "probability_ci95": [0.08086, 0.219],
+                "threshold": 0.03407,
                 "recommendation": "Transport to a Level I trauma center: vehicle "
                 "telemetry consistent with severe injury (ISS 15 "
                 "or more likely).",
                 "outcome": "MAIS3+",
-                "model": "field_mais3@1.0.0",
-                "operating_point": "sens80",
+                "model": "field_mais3@2.0.0",
+                "operating_point": "sens80_per_mode",
             },
             "occupant_model": {
                 "iss15_plus": False,
@@ -126,8 +126,8 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
             "sha256": "b670eb94214f8538cb2bf5a286f617204aec2c091e667622dc418cd6b1ac7710",
         },
         "field_model": {
-            "version": "1.0.0",
-            "sha256": "f3c4be3270d4972d41713e46d3d7044d91575ecfe2fd66d7159f1e42d367d79a",
+            "version": "2.0.0",
+            "sha256": "b353f561ad7481de28385f42f99b6088906c916e56a2e1124dfe4d17ec588c4b",
         },
         "lpm_parameters:compact_sedan": {
             "version": "compact_sedan",
@@ -180,7 +180,7 @@ EXAMPLE_CASE_LIST: dict[str, Any] = {
             "event_id": EXAMPLE_CASE_RESULT["event_id"],
             "client_name": "metro-psap-telematics",
             "received_at": EXAMPLE_CASE_RESULT["received_at"],
-            "iss15_plus": False,
+            "iss15_plus": EXAMPLE_CASE_RESULT["triage"]["iss15_plus"],
             "probability": EXAMPLE_CASE_RESULT["triage"]["probability"],
             "impact_modes": ["frontal"],
         }

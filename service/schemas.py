@@ -641,12 +641,13 @@ class TriageOut(OutModel):
         "`ISS15+` (occupant models), `police_A+K` (statistical baseline).",
         examples=["MAIS3+"],
     )
-    model: str = Field(description="The model that gave it.", examples=["field_mais3@1.0.0"])
+    model: str = Field(description="The model that gave it.", examples=["field_mais3@2.0.0"])
     operating_point: str | None = Field(
         default=None,
         description="Named operating point of the field model whose threshold decided "
-        "(`sens80`: sensitivity >= 0.80 for MAIS 3+ at the smallest flagged share; "
-        "`sens80_per_mode`; `bahouth`: 0.10 frontal/rear, 0.05 side/rollover); null when "
+        "(`sens80_per_mode`, the default: MAIS 3+ sensitivity >= 0.80 within frontal and "
+        "within near-side crashes; `sens80`: >= 0.80 over all modes at the smallest flagged "
+        "share; `bahouth`: 0.10 frontal/rear, 0.05 side/rollover); null when "
         "`AACN_TRIAGE_THRESHOLD` overrides it or for second opinions.",
     )
 

@@ -46,10 +46,10 @@ class Settings(BaseSettings):
     )
     operating_point: str | None = Field(
         default=None,
-        description="Named operating point of the field model: `sens80` (the default: "
-        "sensitivity >= 0.80 for MAIS 3+ at the smallest flagged share), `sens80_per_mode`, "
-        "`bahouth` (0.10 frontal/rear, 0.05 side/rollover). An unknown name leaves the "
-        "service not ready.",
+        description="Named operating point of the field model: `sens80_per_mode` (the "
+        "default: MAIS 3+ sensitivity >= 0.80 within frontal and within near-side crashes), "
+        "`sens80` (>= 0.80 over all modes at the smallest flagged share), `bahouth` (0.10 "
+        "frontal/rear, 0.05 side/rollover). An unknown name leaves the service not ready.",
     )
     field_artifact: Path | None = Field(
         default=None,

@@ -80,7 +80,7 @@ _MODE_COLUMNS: Final[tuple[FieldMode, ...]] = (
 
 #: Floor of delta-V inside the logarithm, km/h. [R] Below the 49 CFR 563 event
 #: trigger (8 km/h) the log term would run to minus infinity at rest; 1 km/h keeps
-#: it finite; every calibration row is above it (smallest 1.86 km/h).
+#: it finite; every calibration row is above it (smallest 3 km/h).
 MIN_LOG_DELTA_V_KMH: Final[float] = 1.0
 
 #: Body mass index range the model is evaluated in, kg/m^2. [R] The calibration

@@ -50,6 +50,8 @@ from models.notification import Sex
 
 __all__ = [
     "ARTIFACT_SCHEMA",
+    "artifact_for_version",
+    "artifact_versions",
     "OUTCOME",
     "FieldModel",
     "FieldPrediction",
@@ -228,6 +230,21 @@ class FieldModel:
             raise ValueError(f"field model artifact {p}: {exc}") from None
 
     @classmethod
+    def from_document(cls, doc: Mapping[str, Any]) -> FieldModel:
+        """Load and verify an artifact document not yet written (the offline fit's).
+
+        Raises
+        ------
+        ValueError
+            As :meth:`from_artifact`.
+        """
+        raw = json.dumps(doc, indent=1, allow_nan=False).encode()
+        try:
+            return cls._from_bytes(raw)
+        except _ArtifactError as exc:
+            raise ValueError(f"field model document: {exc}") from None
+
+    @classmethod
     def _from_bytes(cls, raw: bytes) -> FieldModel:
         try:
             doc = json.loads(raw.decode("utf-8"))
@@ -348,6 +365,46 @@ class FieldModel:
 def default_artifact_path() -> Path:
     """The shipped artifact, ``models/field/artifacts/field_mais3.json``."""
     return Path(__file__).resolve().parent / "artifacts" / _ARTIFACT_FILE
+
+
+def artifact_versions() -> dict[str, Path]:
+    """Every field model artifact shipped in the package, by version.
+
+    The shipped one (``field_mais3.json``) and the retired versions kept beside
+    it as ``field_mais3-<version>.json`` (byte for byte as they decided cases,
+    so that their checksums match the stored cases'), for recall reports
+    (``aacn-triage cases rescore``). Versions are read from the files.
+
+    Returns
+    -------
+    dict of str to Path
+    """
+    root = default_artifact_path().parent
+    out: dict[str, Path] = {}
+    for path in sorted(root.glob(f"{Path(_ARTIFACT_FILE).stem}*.json")):
+        try:
+            version = json.loads(path.read_text(encoding="utf-8"))["model"]["version"]
+        except (OSError, ValueError, KeyError, TypeError):
+            continue
+        out[str(version)] = path
+    return out
+
+
+def artifact_for_version(version: str) -> Path:
+    """The shipped or retired artifact of field model `version`.
+
+    Raises
+    ------
+    LookupError
+        No artifact of that version is shipped (the message lists those that are).
+    """
+    versions = artifact_versions()
+    if version not in versions:
+        raise LookupError(
+            f"no field model artifact of version {version!r}; shipped: "
+            + ", ".join(sorted(versions))
+        )
+    return versions[version]
 
 
 def load_default() -> FieldModel:

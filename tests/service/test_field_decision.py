@@ -30,7 +30,7 @@ def test_every_stored_case_records_the_field_model(api_any_db: ApiClient) -> Non
     occ = result["occupants"][0]
     assert occ["triage"]["model"] == f"{field.name}@{field.version}"
     assert occ["triage"]["outcome"] == "MAIS3+"
-    assert occ["triage"]["operating_point"] == "sens80"
+    assert occ["triage"]["operating_point"] == "sens80_per_mode"
     assert occ["field_mode"] == "frontal"
     stored = api_any_db.client.get(
         f"/v1/cases/{result['case_id']}", headers=api_any_db.headers("auditor")
@@ -63,7 +63,7 @@ def test_the_decision_responds_to_what_the_field_data_know(api: ApiClient) -> No
     assert p(age_years=80) > p(age_years=20)
 
 
-@pytest.mark.parametrize("operating_point", ["bahouth", "sens80_per_mode"])
+@pytest.mark.parametrize("operating_point", ["bahouth", "sens80"])
 def test_the_operating_point_is_configurable(tmp_path: Path, operating_point: str) -> None:
     settings = Settings(
         database_url=f"sqlite:///{tmp_path / 'a.db'}", operating_point=operating_point
@@ -159,3 +159,21 @@ def test_assumptions_carry_codes_an_integrator_can_act_on(api: ApiClient) -> Non
     assert ("seat_position_not_sensed", 0) in codes
     for a in r.json()["assumptions"]:
         assert a["message"]
+
+
+def test_the_readme_example_answers_over_http_as_the_readme_says(api: ApiClient) -> None:
+    """The README's generated block answers its example through the engine directly
+    (models/offline/field/readme.py); the real HTTP path gives the same decision."""
+    import json
+
+    from models.field.model import default_artifact_path
+    from models.offline.field.readme import README_EXAMPLE, example_answer
+
+    doc = json.loads(default_artifact_path().read_text(encoding="utf-8"))
+    expected = example_answer(doc)
+    r = api.client.post("/v1/cases", json=README_EXAMPLE, headers=api.headers("submitter"))
+    assert r.status_code == 201, r.text
+    got = r.json()["triage"]
+    for key in ("probability", "probability_ci95", "threshold", "model", "operating_point"):
+        assert got[key] == expected[key], key
+    assert got["recommendation"] == expected["recommendation"]

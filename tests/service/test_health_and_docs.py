@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+import pytest
 from fastapi.testclient import TestClient
 from openapi_spec_validator import validate
 
@@ -20,6 +21,34 @@ def test_the_documented_result_example_is_a_valid_result() -> None:
 
     CaseResult.model_validate(EXAMPLE_CASE_RESULT)
     StoredCase.model_validate(EXAMPLE_STORED_CASE)
+
+
+def test_the_result_example_is_the_shipped_engines_answer() -> None:
+    """The documented answer to the summary example is what the engine answers now
+    (rounded as the example is): a model release re-derives it (issue 32)."""
+    from datetime import UTC, datetime
+
+    from models.triage import load_engine_models
+    from service.cases_service import evaluate
+    from service.examples import EXAMPLE_CASE_RESULT
+    from service.schemas import CrashNotificationIn
+
+    body = EXAMPLE_NOTIFICATIONS["summary"]["value"]
+    notification = CrashNotificationIn.model_validate(body)
+    result = evaluate(
+        notification, load_engine_models(), case_id=None, received_at=datetime.now(UTC)
+    ).model_dump(mode="json")
+    documented = EXAMPLE_CASE_RESULT
+    for key in ("iss15_plus", "model", "operating_point", "outcome", "recommendation"):
+        assert documented["triage"][key] == result["triage"][key], key
+    for key in ("probability", "threshold"):
+        assert documented["triage"][key] == pytest.approx(result["triage"][key], rel=5e-4)
+    for got, want in zip(
+        documented["triage"]["probability_ci95"], result["triage"]["probability_ci95"], strict=True
+    ):
+        assert got == pytest.approx(want, rel=5e-4)
+    assert documented["occupants"][0]["triage"] == documented["triage"]
+    assert documented["models"]["field_model"] == result["models"]["field_model"]
 
 
 def test_livez_and_readyz(api: ApiClient) -> None:

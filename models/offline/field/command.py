@@ -12,6 +12,7 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from models.offline.field.fit import FitConfig, fit_field, write_artifact
+from models.offline.field.readme import example_answer, readme_block, update_readme
 from models.offline.field.report import default_report_dir, write_model_card
 
 __all__ = ["main"]
@@ -37,6 +38,10 @@ def main(argv: Sequence[str] | None = None) -> int:
     path = write_artifact(fit.artifact, args.artifact)
     card = write_model_card(fit, args.out or default_report_dir())
     sys.stderr.write(f"artifact: {path}\nmodel card: {card}\n")
+    if args.artifact is None and not args.quick:
+        # the shipped artifact: the README's figures and example answer follow it
+        readme = update_readme(readme_block(fit.artifact, example_answer(fit.artifact)))
+        sys.stderr.write(f"README figures: {readme or 'no README with the markers'}\n")
     return 0
 
 

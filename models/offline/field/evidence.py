@@ -57,6 +57,10 @@ class RowEvidence:
     point_outside_interval : bool or None
     p_baseline : float
         The statistical baseline's probability.
+    measures : dict of str to float or None
+        The occupant model's nominal injury measures (names with units, as
+        :class:`models.injury.measures.InjuryMeasures`; None where no occupant
+        model answered).
     """
 
     event_id: str
@@ -67,6 +71,7 @@ class RowEvidence:
     p_lpm_uncorrected: float | None
     point_outside_interval: bool | None
     p_baseline: float
+    measures: dict[str, float] | None = None
 
     @property
     def p_previous_decision(self) -> float:
@@ -132,6 +137,7 @@ def _one(notification: CrashNotification) -> dict[str, Any]:
         p_lpm_uncorrected=None if lpm is None else lpm.probability_uncorrected,
         point_outside_interval=None if lpm is None else lpm.point_outside_interval,
         p_baseline=ev.baseline.probability,
+        measures=None if lpm is None else dict(lpm.measures),
     ).to_json()
 
 

@@ -17,9 +17,20 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from models.field.features import FEATURE_NAMES, FieldInputs, FieldMode, Imputation, design_matrix
+from models.field.model import FieldModel
 from models.offline.field.evaluate import evaluation_markdown, reliability_plot
 from models.offline.field.fit import FieldFit
+from models.offline.field.published import (
+    AUGENSTEIN_DELTA_V_MPH,
+    AUGENSTEIN_MAIS3_AT_30_MPH,
+    NHTSA_ALL,
+    NHTSA_CHECK_SPEEDS_MPH,
+    NHTSA_FRONTAL,
+    augenstein_check,
+    curve_check,
+)
 from models.offline.paths import docs_dir
+from models.units import mph_to_kmh
 
 __all__ = ["default_report_dir", "risk_curve_plot", "write_model_card"]
 
@@ -53,14 +64,14 @@ def risk_curve_plot(path: Path, fit: FieldFit) -> Path:
     beta = np.array(doc["coefficients"])
     boot = np.array(doc["bootstrap_coefficients"])
     imp = Imputation(**doc["imputation"])
-    dv = np.linspace(2.0, 80.0, 80)
+    delta_v_kmh = np.linspace(2.0, 120.0, 119)
     fig = Figure(figsize=(10.0, 6.0))
     axes = fig.subplots(2, 3, sharex=True, sharey=True).ravel()
     for ax, mode in zip(axes, FieldMode, strict=False):
         for belted, colour in ((True, "tab:blue"), (False, "tab:red")):
             inputs = [
                 FieldInputs(delta_v_kmh=float(v), mode=mode, belted=belted, multiple_impacts=False)
-                for v in dv
+                for v in delta_v_kmh
             ]
             x, _ = design_matrix(inputs, imp)
             eta = x @ beta
@@ -68,10 +79,11 @@ def risk_curve_plot(path: Path, fit: FieldFit) -> Path:
             p = 1 / (1 + np.exp(-eta))
             lo = 1 / (1 + np.exp(-(eta - 1.96 * sd)))
             hi = 1 / (1 + np.exp(-(eta + 1.96 * sd)))
-            ax.plot(dv, p, color=colour, label="belted" if belted else "unbelted")
-            ax.fill_between(dv, lo, hi, color=colour, alpha=0.2)
-        t = doc["operating_points"]["sens80"]["thresholds"][mode.value]
-        ax.axhline(t, color="black", linestyle=":", linewidth=1, label="sens80 threshold")
+            ax.plot(delta_v_kmh, p, color=colour, label="belted" if belted else "unbelted")
+            ax.fill_between(delta_v_kmh, lo, hi, color=colour, alpha=0.2)
+        default = doc["default_operating_point"]
+        t = doc["operating_points"][default]["thresholds"][mode.value]
+        ax.axhline(t, color="black", linestyle=":", linewidth=1, label=f"{default} threshold")
         ax.set_title(mode.value)
         ax.set_ylim(0.0, 1.0)
         ax.grid(alpha=0.3)
@@ -358,6 +370,67 @@ def _physics_section(fit: FieldFit) -> list[str]:
     ]
 
 
+def _odds_ratio_to_nhtsa_frontal() -> float:
+    """Odds of Augenstein et al.'s frontal level over NHTSA's frontal curve at their speed."""
+    aug = AUGENSTEIN_MAIS3_AT_30_MPH[FieldMode.FRONTAL]
+    nhtsa = NHTSA_FRONTAL.probability(AUGENSTEIN_DELTA_V_MPH)
+    return (aug / (1.0 - aug)) / (nhtsa / (1.0 - nhtsa))
+
+
+def _published_section(fit: FieldFit) -> list[str]:
+    """The model against published field curves given in mph (:mod:`.published`)."""
+    model = FieldModel.from_document(fit.artifact)
+    occupants = list(fit.inputs)
+    lines = [
+        "## Against published field curves (mph, converted explicitly)",
+        "",
+        "The model standardised over the calibration occupants (each occupant's delta-V set "
+        "to the speed, probabilities averaged; sex unknown), against published curves given "
+        "in mph (`models/offline/field/published.py`; tolerances and their reasons there; "
+        "held by `tests/models/field/test_published_curves.py`).",
+        "",
+        "| curve | "
+        + " | ".join(f"{v:g} mph ({mph_to_kmh(v):.0f} km/h)" for v in NHTSA_CHECK_SPEEDS_MPH)
+        + " | logit slope per mph (published) | within tolerance |",
+        "|---|" + "---|" * (len(NHTSA_CHECK_SPEEDS_MPH) + 2),
+    ]
+    for curve in (NHTSA_ALL, NHTSA_FRONTAL):
+        c = curve_check(model, occupants, curve)
+        cells = [f"{m:.3f} ({p:.3f})" for m, p in zip(c.model, c.published, strict=True)]
+        lines.append(
+            f"| {curve.name}: model (published) | "
+            + " | ".join(cells)
+            + f" | {c.slope_per_mph:.4f} ({curve.slope_per_mph}) | {'yes' if c.passed else 'NO'} |"
+        )
+    a = augenstein_check(model, occupants)
+    lines += [
+        "",
+        f"Crash modes at {AUGENSTEIN_DELTA_V_MPH:g} mph ({mph_to_kmh(AUGENSTEIN_DELTA_V_MPH):.1f} "
+        "km/h), every calibration occupant put in the mode, against Augenstein et al. (2003). "
+        "Their population's covariates are not stated (NASS-CDS with CIREN trauma-center "
+        f"cases; their frontal level is {_odds_ratio_to_nhtsa_frontal():.1f} times NHTSA's "
+        "frontal curve in odds at that speed), so they check the model's relative risks "
+        "across modes, not its level:",
+        "",
+        "| crash mode | model P | published P | log odds ratio vs frontal: model | published |",
+        "|---|---|---|---|---|",
+    ]
+    for mode, p in a.model.items():
+        pub = AUGENSTEIN_MAIS3_AT_30_MPH[mode]
+        if mode in a.log_odds_ratios:
+            ors = f"{a.log_odds_ratios[mode]:+.2f} | {a.published_log_odds_ratios[mode]:+.2f}"
+        else:
+            ors = "- | -"
+        lines.append(f"| {mode.value} | {p:.3f} | {pub:.3f} | {ors} |")
+    lines += [
+        "",
+        "Modes ordered as published and every odds ratio within tolerance: "
+        + ("yes." if a.passed else "NO: " + "; ".join(a.failures)),
+        "",
+    ]
+    return lines
+
+
 def _limits_and_provenance(doc: dict[str, Any]) -> list[str]:
     """What the model does not cover, and the checksums of what it was fitted on."""
     data = doc["data"]
@@ -405,6 +478,7 @@ def write_model_card(fit: FieldFit, out_dir: Path) -> Path:
         "",
         *_what_it_is(fit, curves.name),
         *_physics_section(fit),
+        *_published_section(fit),
         "## The decision: operating points",
         "",
         "Set on the out-of-fold predictions of the whole file; the figures below are "

@@ -47,9 +47,11 @@ from models.notification import (
 )
 from models.offline.field_check import FieldCase
 from models.offline.paths import DATA_DIR
+from models.units import KM_PER_MILE, mph_to_kmh
 
 __all__ = [
     "ASSUMED_DEPLOY_DELTA_V_KMH",
+    "DELTA_V_UNIT_TOLERANCE_KMH",
     "police_notification",
     "rows_by_mode",
     "CALIBRATION_CSV",
@@ -70,6 +72,13 @@ CRASH_MODES: Final[tuple[str, ...]] = ("Frontal", "NS", "FS", "Rear", "roll")
 #: say, km/h. [R] between the FMVSS 208 "no fire" (about 13 km/h, 8 mph) and
 #: "must fire" (about 26 km/h, 16 mph) speeds of frontal airbag sensing.
 ASSUMED_DEPLOY_DELTA_V_KMH: Final[float] = 20.0
+
+#: Largest accepted difference between the file's km/h delta-V and its mph
+#: delta-V converted, km/h. [R] The source extract divided by a rounded factor
+#: (1.6093: 20 km/h is 12.4278 mph) and kept 4 decimals, so the mph column
+#: times 1.609344 runs up to 2.8e-5 high: 0.0032 km/h at the largest, 117 km/h.
+#: 0.01 km/h allows that and refuses any other unit (mph read as km/h is 38 % off).
+DELTA_V_UNIT_TOLERANCE_KMH: Final[float] = 0.01
 
 
 @dataclass(frozen=True)
@@ -126,6 +135,30 @@ def clock_to_pdof_deg(clock: int) -> float:
     return float((clock % 12) * 30)
 
 
+def _checked_delta_v_kmh(rec: dict[str, str]) -> float:
+    """The row's delta-V in km/h, held against the file's mph column.
+
+    The file carries both units (``delta_v_kmh``, NASS-CDS's integer km/h, and
+    ``delta_v_mph`` = km/h / 1.609344, as the source extract stored it). An
+    earlier copy had one mph column labelled km/h (``data/PROVENANCE-mais-2000-2014.md``,
+    "Units correction"); a file without the named km/h column, or whose two
+    columns disagree, is refused rather than read in the wrong unit.
+    """
+    if "delta_v_kmh" not in rec:
+        raise ValueError(
+            f"row {rec.get('row')}: no `delta_v_kmh` column (a file with an unlabelled "
+            "`delta_v` is the mislabelled mph copy: use the corrected file)"
+        )
+    delta_v_kmh = float(rec["delta_v_kmh"])
+    delta_v_mph = float(rec["delta_v_mph"])
+    if abs(mph_to_kmh(delta_v_mph) - delta_v_kmh) > DELTA_V_UNIT_TOLERANCE_KMH:
+        raise ValueError(
+            f"row {rec['row']}: delta_v_kmh {delta_v_kmh} is not delta_v_mph "
+            f"{delta_v_mph} x {KM_PER_MILE}"
+        )
+    return delta_v_kmh
+
+
 def load_calibration_rows(path: Path | None = None) -> tuple[CalibrationRow, ...]:
     """Read the calibration CSV.
 
@@ -142,7 +175,8 @@ def load_calibration_rows(path: Path | None = None) -> tuple[CalibrationRow, ...
     Raises
     ------
     ValueError
-        A row with an unknown crash mode or a missing column.
+        A row with an unknown crash mode or a missing column, or whose km/h
+        and mph delta-V disagree.
     """
     rows = []
     with (path or CALIBRATION_CSV).open(newline="", encoding="utf-8") as fh:
@@ -156,7 +190,7 @@ def load_calibration_rows(path: Path | None = None) -> tuple[CalibrationRow, ...
                     mais3=rec["mais3pl"] == "1",
                     mais=int(rec["mais"]),
                     crash_mode=mode,
-                    delta_v_kmh=float(rec["delta_v"]),
+                    delta_v_kmh=_checked_delta_v_kmh(rec),
                     belted=rec["belt_use"] == "1",
                     age_years=float(rec["age"]),
                     stature_cm=float(rec["height"]),

@@ -29,6 +29,7 @@ from models.field.model import (
 )
 from models.impact_mode import ImpactMode
 from models.notification import Sex
+from models.units import mph_to_kmh
 
 
 @pytest.fixture(scope="module")
@@ -50,7 +51,7 @@ def _inputs(dv: float, mode: FieldMode = FieldMode.FRONTAL, **kw: object) -> Fie
 
 def test_the_shipped_artifact_loads_and_names_its_outcome(model: FieldModel) -> None:
     assert model.outcome == OUTCOME == "MAIS3+"
-    assert model.default_operating_point == "sens80"
+    assert model.default_operating_point == "sens80_per_mode"
     assert set(model.operating_points) == {"sens80", "sens80_per_mode", "bahouth"}
     bahouth = model.operating_points["bahouth"].thresholds
     assert bahouth[FieldMode.FRONTAL] == 0.10
@@ -151,22 +152,19 @@ def test_a_reported_rollover_is_the_rollover_mode() -> None:
     assert field_mode(ImpactMode.NEAR_SIDE, rollover=False) is FieldMode.NEAR_SIDE
 
 
-def test_risk_levels_against_published_field_figures(model: FieldModel) -> None:
-    """At 30 mph (48.3 km/h) delta-V, Augenstein et al. 2003 give MAIS 3+ risks of 38.9 %
-    frontal, 83.8 % near side, 47.8 % far side, 19.9 % rear (crash-data-and-triage.md; their
-    covariates not stated). The model, for a belted 40-year-old, stays within 0.12 of each
-    and keeps their order (near side > far side, frontal > rear)."""
-    published = {
-        FieldMode.FRONTAL: 0.389,
-        FieldMode.NEAR_SIDE: 0.838,
-        FieldMode.FAR_SIDE: 0.478,
-        FieldMode.REAR: 0.199,
-    }
-    got = {m: model.predict(_inputs(48.28, m)).probability for m in published}
-    for m, p in published.items():
-        assert got[m] == pytest.approx(p, abs=0.12), m
-    assert got[FieldMode.NEAR_SIDE] > got[FieldMode.FAR_SIDE] >= got[FieldMode.REAR]
-    assert got[FieldMode.FRONTAL] > got[FieldMode.REAR]
+def test_crash_modes_keep_augenstein_s_order_at_30_mph(model: FieldModel) -> None:
+    """At 30 mph, converted explicitly, a belted 40-year-old's risk keeps the order of
+    Augenstein et al. 2003 (near side > far side > frontal > rear).
+
+    Their levels (38.9 % frontal ...) are not held here: their population's covariates
+    are not stated, and their frontal level is 5.3 times NHTSA's frontal curve in odds.
+    A check of these levels within 0.12 passed on field model 1.0.0 only because it read
+    48 km/h as 48 mph; the levels are now held against NHTSA's curves, and the mode
+    effects against Augenstein's odds ratios (``test_published_curves.py``)."""
+    delta_v_kmh = mph_to_kmh(30.0)
+    got = {m: model.predict(_inputs(delta_v_kmh, m)).probability for m in FieldMode}
+    order = [FieldMode.NEAR_SIDE, FieldMode.FAR_SIDE, FieldMode.FRONTAL, FieldMode.REAR]
+    assert [got[m] for m in order] == sorted((got[m] for m in order), reverse=True)
 
 
 # ------------------------------------------------------------------ the artifact checks

@@ -1,0 +1,49 @@
+"""README.md's figures of the decision are the shipped artifact's (issue 32).
+
+`aacn-triage fit-field` writes them (models/offline/field/readme.py); these tests
+hold the README to what the shipped artifact renders, and the README's example
+answer to the engine's, so that a refit cannot leave stale figures behind.
+"""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from models.field.model import default_artifact_path
+from models.offline.field.readme import (
+    BEGIN,
+    END,
+    README_EXAMPLE,
+    example_answer,
+    readme_block,
+    readme_path,
+)
+
+DOC = json.loads(default_artifact_path().read_text(encoding="utf-8"))
+
+
+@pytest.fixture(scope="module")
+def answer() -> dict[str, object]:
+    return example_answer(DOC)
+
+
+def test_the_readme_block_is_the_shipped_artifacts(answer: dict[str, object]) -> None:
+    text = readme_path().read_text(encoding="utf-8")
+    start, end = text.index(BEGIN), text.index(END) + len(END)
+    assert text[start:end] == readme_block(DOC, answer)
+
+
+def test_the_readme_example_is_the_one_in_try_it() -> None:
+    """The notification the block answers is the one the README's curl sends."""
+    text = readme_path().read_text(encoding="utf-8")
+    curl = text[text.index("-d '{") + 4 : text.index("}]}'") + 3]
+    assert json.loads(curl) == README_EXAMPLE
+
+
+def test_the_example_is_no_longer_over_triaged(answer: dict[str, object]) -> None:
+    """A belted 42-year-old at 40 km/h with the airbag: 1.0.0 answered 0.23 (it read
+    40 km/h as 40 mph); NHTSA's all-crash curve gives 0.05 at 25 mph (40 km/h)."""
+    assert answer["model"] == f"field_mais3@{DOC['model']['version']}"
+    assert float(answer["probability"]) < 0.10  # type: ignore[arg-type]

@@ -1,0 +1,141 @@
+"""`aacn-triage cases rescore`: the model recall report (issue 32).
+
+A database holds cases decided by the retired field model 1.0.0 (fitted on mph
+read as km/h), submitted through the real HTTP path. The report lists the cases
+whose decision the shipped version changes, with the old and new probability
+and decision, writes them as CSV, and leaves every stored record as it was.
+"""
+
+from __future__ import annotations
+
+import csv
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+from sqlalchemy import select
+
+from models.field.model import artifact_for_version, artifact_versions, load_default
+from models.triage import load_engine_models
+from service import cli
+from service.db.tables import Case, CaseOccupant
+from service.rescore import CSV_COLUMNS, rescore
+from service.settings import get_settings
+from tests.conftest import _api
+from tests.support import ApiClient, summary
+
+#: Delta-V of the stored cases, km/h: from a low-speed crash to a severe one, so
+#: that the retired model (which read 40 km/h as 40 mph) flags some that the
+#: shipped one does not.
+DELTA_V_KMH = (15.0, 25.0, 35.0, 40.0, 45.0, 55.0, 70.0, 90.0)
+
+RETIRED = "1.0.0"
+
+
+@pytest.fixture
+def old_api(sqlite_url: str, tmp_path: Path) -> Iterator[ApiClient]:
+    """The service as it ran with the retired field model."""
+    yield from _api(sqlite_url, tmp_path, field_artifact=artifact_for_version(RETIRED))
+
+
+def _snapshot(api: ApiClient) -> list[tuple[Any, ...]]:
+    sessions = api.client.app.state.ctx.sessions  # type: ignore[attr-defined]
+    with sessions() as session:
+        cases = [
+            (c.id, c.event_id, c.result, c.models, c.probability, c.iss15_plus, c.notification)
+            for c in session.scalars(select(Case).order_by(Case.id))
+        ]
+        occupants = [
+            (o.case_id, o.position, o.probability, o.iss15_plus)
+            for o in session.scalars(select(CaseOccupant).order_by(CaseOccupant.case_id))
+        ]
+    return [*cases, *occupants]
+
+
+def _submit_cases(api: ApiClient) -> dict[str, dict[str, Any]]:
+    out = {}
+    for i, dv in enumerate(DELTA_V_KMH):
+        body = summary(dv, belted=i % 3 != 0, event_id=f"recall-{i}")
+        r = api.client.post("/v1/cases", json=body, headers=api.headers("submitter"))
+        assert r.status_code == 201, r.text
+        out[r.json()["case_id"]] = r.json()
+    return out
+
+
+def test_both_versions_are_shipped_and_the_default_is_the_refit() -> None:
+    versions = artifact_versions()
+    assert RETIRED in versions
+    assert load_default().version in versions
+    assert load_default().version != RETIRED
+    with pytest.raises(LookupError, match="shipped"):
+        artifact_for_version("0.0.1")
+
+
+def test_rescore_lists_the_changed_decisions_and_alters_nothing(old_api: ApiClient) -> None:
+    answered = _submit_cases(old_api)
+    assert all(a["triage"]["model"] == f"field_mais3@{RETIRED}" for a in answered.values())
+    before = _snapshot(old_api)
+
+    sessions = old_api.client.app.state.ctx.sessions  # type: ignore[attr-defined]
+    report = rescore(sessions, load_engine_models())
+    assert report.cases == len(DELTA_V_KMH)
+    assert not report.refused
+    new_version = load_default().version
+    for row in report.rows:
+        old = answered[row.case_id]["triage"]
+        assert row.old_probability == old["probability"]
+        assert row.old_decision == old["iss15_plus"]
+        assert row.old_model == f"field_mais3@{RETIRED}"
+        assert row.new_model == f"field_mais3@{new_version}"
+    # the retired model read km/h as mph: it over-predicted every one of these cases
+    assert all(r.new_probability < r.old_probability for r in report.rows)
+    assert report.changed, "the 1.6x over-read must change some dispatch advice"
+    assert report.down == len(report.changed), "only over-triage is withdrawn"
+    assert _snapshot(old_api) == before, "the stored records are not altered"
+
+
+def test_rescore_with_the_deciding_version_changes_nothing(old_api: ApiClient) -> None:
+    """Determinism: the same notification and model version give the same answer."""
+    answered = _submit_cases(old_api)
+    sessions = old_api.client.app.state.ctx.sessions  # type: ignore[attr-defined]
+    models = load_engine_models(field_artifact=artifact_for_version(RETIRED))
+    report = rescore(sessions, models)
+    assert len(report.rows) == len(answered)
+    assert not report.changed
+    for row in report.rows:
+        assert row.new_probability == row.old_probability
+
+
+def test_the_command_prints_and_writes_the_changed_cases(
+    old_api: ApiClient,
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    answered = _submit_cases(old_api)
+    before = _snapshot(old_api)
+    monkeypatch.setenv("AACN_DATABASE_URL", old_api.settings.database_url)
+    get_settings.cache_clear()
+    out = tmp_path / "recall.csv"
+    try:
+        new_version = load_default().version
+        assert cli.main(["cases", "rescore", "--model", new_version, "--out", str(out)]) == 0
+        printed = capsys.readouterr()
+        assert cli.main(["cases", "rescore", "--model", "9.9.9", "--out", str(out)]) == 2
+        assert "no field model artifact of version '9.9.9'" in capsys.readouterr().err
+    finally:
+        get_settings.cache_clear()
+    with out.open(newline="", encoding="utf-8") as fh:
+        rows = list(csv.DictReader(fh))
+    assert tuple(rows[0]) == CSV_COLUMNS
+    assert rows, "some decisions change"
+    for row in rows:
+        old = answered[row["case_id"]]["triage"]
+        assert row["old_decision"] == str(old["iss15_plus"]).lower()
+        assert row["new_decision"] != row["old_decision"]
+        assert float(row["old_probability"]) == pytest.approx(old["probability"], abs=5e-7)
+        assert row["case_id"] in printed.out
+    assert f"{len(answered)} stored cases" in printed.err
+    assert f"{len(rows)} decisions change" in printed.err
+    assert _snapshot(old_api) == before
