@@ -60,6 +60,7 @@ from service.problems import FieldError, MalformedXml, UnprocessableNotification
 from service.schemas import CrashNotificationIn, ReceivedSource
 
 __all__ = [
+    "EXAMPLE_VEDS",
     "KM_PER_MILE",
     "MAX_DEPTH",
     "MAX_ELEMENTS",
@@ -130,6 +131,49 @@ _BOOLEANS: Final = {"true": True, "1": True, "false": False, "0": False}
 
 def _said(flag: bool | None) -> str:
     return "absent" if flag is None else str(flag).lower()
+
+
+#: The OpenAPI example of a VEDS body (written for this service in the shape of the
+#: RFC 8148 example): a frontal crash at 20 MPH, a belted driver, a deployed airbag.
+EXAMPLE_VEDS: Final[dict[str, dict[str, str]]] = {
+    "veds_frontal": {
+        "summary": "VEDS 3.1, frontal crash in MPH",
+        "description": "20 MPH (32.19 km/h) at 12 o'clock; a belted driver whose frontal "
+        "airbag deployed. The incident id is the event_id.",
+        "value": """<?xml version="1.0" encoding="UTF-8"?>
+<veds:AutomatedCrashNotification xmlns:veds="http://www.veds.org/acn/3.1"
+    xmlns:nc="http://niem.gov/niem/niem-core/2.0">
+  <veds:Crash>
+    <nc:ActivityIdentification><nc:IdentificationID>tsp-7d1c2a90-0004</nc:IdentificationID>
+    </nc:ActivityIdentification>
+    <nc:ActivityDate><nc:DateTime>2026-11-23T08:15:30Z</nc:DateTime></nc:ActivityDate>
+    <veds:CrashVehicle>
+      <nc:ItemMakeName>Toyota</nc:ItemMakeName>
+      <nc:ItemModelName>Yaris</nc:ItemModelName>
+      <nc:ItemModelYearDate>2010</nc:ItemModelYearDate>
+      <veds:Airbag>
+        <veds:AirbagCategoryCode>FRONT</veds:AirbagCategoryCode>
+        <veds:AirbagDeployedIndicator>true</veds:AirbagDeployedIndicator>
+      </veds:Airbag>
+      <veds:VehicleCrashPulse>
+        <veds:CrashPulseChangeInVelocityMeasure>
+          <nc:MeasurePointValue>20</nc:MeasurePointValue>
+          <nc:MeasureUnitText>MPH</nc:MeasureUnitText>
+        </veds:CrashPulseChangeInVelocityMeasure>
+        <veds:CrashPulsePrincipalDirectionOfForceValue>12</veds:CrashPulsePrincipalDirectionOfForceValue>
+        <veds:CrashPulseRolloverQuarterTurnsValue>0</veds:CrashPulseRolloverQuarterTurnsValue>
+      </veds:VehicleCrashPulse>
+      <veds:VehicleSeat>
+        <veds:VehicleSeatLocationCategoryCode>1</veds:VehicleSeatLocationCategoryCode>
+        <veds:VehicleSeatOccupiedIndicator>true</veds:VehicleSeatOccupiedIndicator>
+        <veds:VehicleSeatbeltFastenedIndicator>true</veds:VehicleSeatbeltFastenedIndicator>
+      </veds:VehicleSeat>
+    </veds:CrashVehicle>
+  </veds:Crash>
+</veds:AutomatedCrashNotification>
+""",
+    }
+}
 
 
 def is_veds_media_type(content_type: str) -> bool:
