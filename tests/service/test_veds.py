@@ -149,6 +149,29 @@ def test_a_veds_document_is_triaged_as_its_json_twin(api: ApiClient, name: str) 
     assert "age_imputed" in _codes(veds), "VEDS gives no occupant's age"
 
 
+def test_side_airbags_go_to_the_near_side_driver_as_in_json(api: ApiClient) -> None:
+    # kph-frontal.xml hit at 9 o'clock (the left: the driver's near side) with its curtain
+    # airbags deployed: the driver's side airbag is deployed, as a JSON client would say
+    raw = (
+        _doc("kph-frontal.xml")
+        .replace(b">12</veds:CrashPulsePrincipal", b">9</veds:CrashPulsePrincipal")
+        .replace(b"<veds:AirbagDeployedIndicator>false", b"<veds:AirbagDeployedIndicator>true")
+    )
+    r = _post_veds(api, raw)
+    assert r.status_code == 201, r.text
+    twin = JSON_TWINS["kph-frontal.xml"]
+    body = {
+        **twin,
+        "event_id": "json-twin-near-side",
+        "crash": {**twin["crash"], "pulse": {**twin["crash"]["pulse"], "pdof_deg": 270.0}},
+        "occupants": [{**o, "side_airbag": "deployed"} for o in twin["occupants"]],
+    }
+    veds, json_answer = r.json(), _post_json(api, body)
+    assert _triage_part(veds) == _triage_part(json_answer)
+    assert [o["impact_mode"] for o in veds["occupants"]] == ["near_side", "far_side"]
+    assert "side_airbag_not_reported" not in _codes(veds)
+
+
 def test_the_mph_document_and_its_kph_twin_give_bit_identical_answers(api: ApiClient) -> None:
     # 20 MPH x 1.609344 = 32.18688 KPH exactly: the conversion is done in decimal
     # arithmetic, so both documents give the same float and the same answer (no tolerance)
