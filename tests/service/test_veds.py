@@ -21,6 +21,7 @@ from service.spool import Spool, SpoolEntry
 from service.veds import (
     KM_PER_MILE,
     MAX_DEPTH,
+    MAX_ELEMENTS,
     VEDS_MEDIA_TYPE,
     clock_to_pdof_deg,
     delta_v_to_kmh,
@@ -438,6 +439,7 @@ DEEP = _ROOT_OPEN + b"<veds:Crash>" * 100 + b"</veds:Crash>" * 100 + _ROOT_CLOSE
         (LAUGHS, "xml_dtd_forbidden"),
         (PARAMETER_ENTITY, "xml_dtd_forbidden"),
         (DEEP, "xml_too_deep"),
+        (_ROOT_OPEN + b"<veds:Crash/>" * (MAX_ELEMENTS + 1) + _ROOT_CLOSE, "xml_too_many_elements"),
         (b"<veds:AutomatedCrashNotification", "xml_malformed"),
         (b"", "xml_empty"),
         (_ROOT_OPEN + _ROOT_CLOSE + _ROOT_OPEN + _ROOT_CLOSE, "xml_malformed"),
@@ -449,6 +451,7 @@ DEEP = _ROOT_OPEN + b"<veds:Crash>" * 100 + b"</veds:Crash>" * 100 + _ROOT_CLOSE
         "entity-expansion",
         "parameter-entity",
         "100-levels",
+        "too-many-elements",
         "not-well-formed",
         "empty",
         "two-roots",
