@@ -120,6 +120,16 @@ AIRBAG_CATEGORIES: Final = frozenset({"FRONT", "SIDE", "CURTAIN", "ROOF", "SEAT"
 #: Delta-V units (nc:MeasureUnitText) and their factor to km/h.
 DELTA_V_UNITS: Final[dict[str, Decimal]] = {"KPH": Decimal(1), "MPH": KM_PER_MILE}
 
+#: Notification fields VEDS cannot carry, and the code of what the engine then assumes
+#: (recorded in every VEDS case's mapping: "occupant age unknown" and the like).
+NOT_IN_VEDS: Final[tuple[tuple[str, AssumptionCode], ...]] = (
+    ("occupants[].age_years", AssumptionCode.AGE_IMPUTED),
+    ("occupants[].stature_cm, mass_kg", AssumptionCode.BMI_IMPUTED),
+    ("occupants[].body", AssumptionCode.BODY_UNKNOWN),
+    ("occupants[].posture_lumbar_flexion_deg", AssumptionCode.POSTURE_NOT_SENSED),
+    ("occupants[].seat_track_mm", AssumptionCode.SEAT_POSITION_NOT_SENSED),
+)
+
 _PREFIX_OF: Final = {NC_NAMESPACE: "nc", J_NAMESPACE: "j", **dict.fromkeys(VEDS_NAMESPACES, "veds")}
 #: xsd:decimal's lexical form (no exponent, no underscores, no NaN).
 _DECIMAL = re.compile(r"^[+-]?(\d{1,12}(\.\d{0,12})?|\.\d{1,12})$")
@@ -894,6 +904,7 @@ def read_veds(raw: bytes, *, received_at: datetime) -> VedsNotification:
             for a, f in zip(m.assumed, m.assumed_fields, strict=True)
         ],
         "ignored": m.ignored,
+        "not_in_veds": [{"field": f, "code": code.value} for f, code in NOT_IN_VEDS],
     }
     source = ReceivedSource(
         format="veds",

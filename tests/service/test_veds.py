@@ -226,6 +226,7 @@ def test_the_rfc8148_example_is_triaged_stored_with_its_xml_and_replayed(api: Ap
         "veds:VehicleCrashPulse[1]/veds:CrashPulseChangeInVelocityMeasure/nc:MeasurePointValue"
     )
     assert {a["code"] for a in mapping["assumed"]} >= {"veds_crash_time_assumed"}
+    assert {"field": "occupants[].age_years", "code": "age_imputed"} in mapping["not_in_veds"]
     assert stored["notification"]["crash"]["pulse"]["delta_v_kmh"] == pytest.approx(160.9344)
     # the same document again replays, though its crash time was the receive time
     again = _post_veds(api, raw)
