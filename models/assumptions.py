@@ -40,6 +40,15 @@ class AssumptionCode(StrEnum):
     SURROGATE_UNAVAILABLE = "surrogate_unavailable"
     OUTSIDE_SURROGATE_DESIGN = "outside_surrogate_design"
     POINT_OUTSIDE_INTERVAL = "point_outside_interval"
+    # what a VEDS document (RFC 8148) left open when it was mapped to a notification
+    VEDS_CRASH_TIME_ASSUMED = "veds_crash_time_assumed"
+    VEDS_MOST_SEVERE_PULSE = "veds_most_severe_pulse"
+    VEDS_BELT_NOT_REPORTED = "veds_belt_not_reported"
+    VEDS_AIRBAG_BY_CATEGORY = "veds_airbag_by_category"
+    VEDS_AIRBAG_AMBIGUOUS = "veds_airbag_ambiguous"
+    VEDS_FRONTAL_AIRBAG_NOT_REPORTED = "veds_frontal_airbag_not_reported"
+    VEDS_VEHICLE_CLASS_ASSUMED = "veds_vehicle_class_assumed"
+    VEDS_DRIVE_SIDE_ASSUMED = "veds_drive_side_assumed"
 
 
 #: What each code means and what an integrator may do about it.
@@ -110,6 +119,38 @@ DESCRIPTIONS: Final[dict[AssumptionCode, str]] = {
     ),
     AssumptionCode.POINT_OUTSIDE_INTERVAL: (
         "The direct occupant-model estimate lies outside the surrogate's 95 % interval."
+    ),
+    AssumptionCode.VEDS_CRASH_TIME_ASSUMED: (
+        "VEDS: no incident time (veds:Crash/nc:ActivityDate): the document's received or post "
+        "time, else the time the service received it, was taken as the crash time."
+    ),
+    AssumptionCode.VEDS_MOST_SEVERE_PULSE: (
+        "VEDS: several crash pulses: the one with the largest delta-V was triaged, the others "
+        "count as multiple impacts."
+    ),
+    AssumptionCode.VEDS_BELT_NOT_REPORTED: (
+        "VEDS: belt not reported, or not monitored, for an occupied seat: unbelted assumed (the "
+        "conservative choice)."
+    ),
+    AssumptionCode.VEDS_AIRBAG_BY_CATEGORY: (
+        "VEDS: airbags name no seat: the state every reported airbag of a category shares was "
+        "given to each seat it can protect (FRONT: the front row; SIDE and CURTAIN: every seat)."
+    ),
+    AssumptionCode.VEDS_AIRBAG_AMBIGUOUS: (
+        "VEDS: airbags of one category disagree (some deployed, some not) and name no seat: "
+        "frontal not deployed, side not reported assumed (the conservative choices)."
+    ),
+    AssumptionCode.VEDS_FRONTAL_AIRBAG_NOT_REPORTED: (
+        "VEDS: no FRONT airbag reported: the front row's frontal airbags are taken as not "
+        "deployed (the conservative choice)."
+    ),
+    AssumptionCode.VEDS_VEHICLE_CLASS_ASSUMED: (
+        "VEDS: the document names make, model and year, not an occupant-model vehicle class: "
+        "the default class (compact_sedan) was used."
+    ),
+    AssumptionCode.VEDS_DRIVE_SIDE_ASSUMED: (
+        "VEDS: no drive side in the document: left-hand drive assumed (seat code 1, the "
+        "driver, on the left)."
     ),
 }
 

@@ -34,6 +34,7 @@ from service.problems import PROBLEM_MEDIA_TYPE, install_problem_handlers, probl
 from service.schemas import EXAMPLE_NOTIFICATIONS, CrashNotificationIn
 from service.settings import Settings, get_settings
 from service.spool import Spool, SpoolReplayer
+from service.veds import EXAMPLE_VEDS, VEDS_MEDIA_TYPE
 
 __all__ = ["create_app"]
 
@@ -225,11 +226,26 @@ def _document_notification_body(doc: dict[str, Any], schemas: dict[str, Any]) ->
     schemas["CrashNotificationIn"] = schema
     post["requestBody"] = {
         "required": True,
+        "description": "A notification of this contract (JSON), or a VEDS document (RFC 8148 "
+        "XML) mapped to one (`docs/api.md` has the element-to-field table).",
         "content": {
             "application/json": {
                 "schema": {"$ref": "#/components/schemas/CrashNotificationIn"},
                 "examples": EXAMPLE_NOTIFICATIONS,
-            }
+            },
+            VEDS_MEDIA_TYPE: {
+                "schema": {
+                    "type": "string",
+                    "contentMediaType": VEDS_MEDIA_TYPE,
+                    "description": "A VEDS 3.1 (or 1.0) `veds:AutomatedCrashNotification` "
+                    "document in UTF-8, without a DOCTYPE. Read: the crash pulses (delta-V "
+                    "with its unit KPH or MPH, PDOF in clock hours, rollover quarter turns), "
+                    "the seats (location code 1-5, occupied, belt fastened), the airbags "
+                    "(category, deployed), the rollover and multiple-impacts indicators, the "
+                    "incident id (the `event_id`; else the document's SHA-256) and time.",
+                },
+                "examples": EXAMPLE_VEDS,
+            },
         },
     }
 

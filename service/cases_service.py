@@ -13,6 +13,7 @@ import json
 import logging
 import time
 import uuid
+from collections.abc import Sequence
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from typing import Any
@@ -20,6 +21,7 @@ from typing import Any
 from sqlalchemy.exc import DBAPIError, IntegrityError
 from sqlalchemy.exc import TimeoutError as PoolTimeoutError
 
+from models.assumptions import Assumption
 from models.pulse import PulseError
 from models.triage import EngineModels, Method, UnknownVehicleModel, triage
 from service.auth import Caller
@@ -35,7 +37,14 @@ from service.problems import (
     StoreUnavailable,
     UnprocessableNotification,
 )
-from service.schemas import CaseList, CaseResult, CaseSummary, CrashNotificationIn, StoredCase
+from service.schemas import (
+    CaseList,
+    CaseResult,
+    CaseSummary,
+    CrashNotificationIn,
+    ReceivedSource,
+    StoredCase,
+)
 from service.spool import SpoolEntry, SpoolError
 
 log = logging.getLogger("aacn_triage")
@@ -91,16 +100,27 @@ def _no_negative_zero(value: Any) -> Any:
     return value
 
 
-def notification_sha256(notification: CrashNotificationIn) -> str:
+def notification_sha256(notification: CrashNotificationIn, *, with_time: bool = True) -> str:
     """Fingerprint of what a notification means, for idempotency.
 
     The canonical JSON of the validated notification: every default written out,
     numbers as the floats they are (``56`` and ``56.0`` alike, ``-0.0`` as ``0.0``),
     the crash time in UTC. Two bodies that validate to the same notification are the
-    same body (issue 24: they used to conflict with 409).
+    same body (issue 24: they used to conflict with 409). A VEDS document maps to a
+    notification and is fingerprinted as that notification, so a re-sent document,
+    or the JSON of the same meaning, replays.
+
+    Parameters
+    ----------
+    with_time : bool
+        False when the crash time is not the sender's (a VEDS document without one
+        takes the time it was received): it is then left out, so that the same
+        document sent again replays instead of conflicting.
     """
     document = _no_negative_zero(notification.model_dump(mode="json"))
-    document["occurred_at"] = notification.occurred_at.astimezone(UTC).isoformat()
+    document["occurred_at"] = (
+        notification.occurred_at.astimezone(UTC).isoformat() if with_time else None
+    )
     return canonical_sha256(document)
 
 
@@ -110,8 +130,12 @@ def evaluate(
     *,
     case_id: str | None,
     received_at: datetime,
+    extra_assumptions: Sequence[Assumption] = (),
 ) -> CaseResult:
     """Run the engine on a validated notification (no database).
+
+    `extra_assumptions` (what mapping a VEDS document assumed) come first in the
+    answer's assumptions, before the engine's own.
 
     Raises
     ------
@@ -143,7 +167,12 @@ def evaluate(
             f"{reference} (give it to the operator: the failure is logged under it).",
             reference=reference,
         ) from exc
-    return to_case_result(result, case_id=case_id, received_at=received_at, extra_assumptions=notes)
+    return to_case_result(
+        result,
+        case_id=case_id,
+        received_at=received_at,
+        extra_assumptions=[*extra_assumptions, *notes],
+    )
 
 
 def _conflict(event_id: str, case_id: str) -> IdempotencyConflict:
@@ -185,8 +214,13 @@ def _case_rows(
     request_sha256: str,
     document: Any,
     payload: dict[str, Any],
+    source: dict[str, Any] | None,
 ) -> tuple[Case, IdempotencyRecord]:
-    """The rows of one case, from its result payload (stored directly or spooled)."""
+    """The rows of one case, from its result payload (stored directly or spooled).
+
+    `source` is `ReceivedSource.record()` of a notification that came in as another
+    format than JSON (the document as received and its mapping), else None.
+    """
     case = Case(
         id=case_id,
         event_id=event_id,
@@ -198,6 +232,9 @@ def _case_rows(
         notification=document,
         result=payload,
         models=payload["models"],
+        source_format=source["format"] if source else "json",
+        source_document=source["document"] if source else None,
+        source_mapping=source["mapping"] if source else None,
         engine_version=payload["engine_version"],
         iss15_plus=payload["triage"]["iss15_plus"],
         probability=payload["triage"]["probability"],
@@ -241,6 +278,7 @@ def store_spooled(ctx: ServiceContext, entry: SpoolEntry) -> None:
         request_sha256=entry.request_sha256,
         document=entry.notification,
         payload=entry.result,
+        source=entry.source,
     )
     try:
         with ctx.sessions.begin() as session:
@@ -291,6 +329,7 @@ def submit(
     document: Any,
     caller: Caller,
     received_at: datetime,
+    source: ReceivedSource | None = None,
 ) -> SubmitOutcome:
     """Triage a notification and store it, or replay the stored case of its event_id.
 
@@ -308,6 +347,9 @@ def submit(
     caller : Caller
     received_at : datetime
         When the request arrived (UTC).
+    source : ReceivedSource or None
+        The document as received when it was not this contract's JSON (VEDS): kept
+        with the case, its assumptions added to the answer's.
 
     Raises
     ------
@@ -318,7 +360,8 @@ def submit(
     """
     if ctx.models is None:
         raise RuntimeError("models are not loaded")
-    fingerprint = notification_sha256(notification)
+    time_is_senders = source is None or not source.occurred_at_assumed
+    fingerprint = notification_sha256(notification, with_time=time_is_senders)
     # cases stored before issue 24 carry the fingerprint of the document as received
     fingerprints = (fingerprint, canonical_sha256(document))
     store_up = True
@@ -339,7 +382,13 @@ def submit(
 
     case_id = str(uuid.uuid4())
     start = time.perf_counter()
-    result = evaluate(notification, ctx.models, case_id=case_id, received_at=received_at)
+    result = evaluate(
+        notification,
+        ctx.models,
+        case_id=case_id,
+        received_at=received_at,
+        extra_assumptions=source.assumptions if source else (),
+    )
     ctx.metrics.engine_seconds.observe(time.perf_counter() - start)
 
     stored_at = datetime.now(UTC)
@@ -354,6 +403,7 @@ def submit(
         spooled_at=stored_at,
         notification=document,
         result=payload,
+        source=source.record() if source else None,
     )
     if not store_up:
         return _spool(ctx, entry, fingerprint, result)
@@ -367,6 +417,7 @@ def submit(
         request_sha256=fingerprint,
         document=document,
         payload=payload,
+        source=entry.source,
     )
     try:
         with ctx.sessions.begin() as session:
@@ -405,6 +456,9 @@ def _stored(case: Case) -> StoredCase:
         notification=case.notification,
         result=CaseResult.model_validate(case.result),
         models=case.models,
+        source_format="veds" if case.source_format == "veds" else "json",
+        source_document=case.source_document,
+        source_mapping=case.source_mapping,
     )
 
 

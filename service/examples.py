@@ -170,6 +170,9 @@ EXAMPLE_STORED_CASE: dict[str, Any] = {
     "notification": {"event_id": EXAMPLE_CASE_RESULT["event_id"], "...": "as received"},
     "result": EXAMPLE_CASE_RESULT,
     "models": EXAMPLE_CASE_RESULT["models"],
+    "source_format": "json",
+    "source_document": None,
+    "source_mapping": None,
 }
 
 #: `GET /v1/cases`.

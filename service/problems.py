@@ -7,10 +7,11 @@ Error tree::
      + Forbidden                     403 the key's role may not do this
      + NotFound                      404
      + MalformedBody                 400 not one JSON document with unique keys
+     + MalformedXml                  400 not one safe, well-formed XML document (VEDS)
      + IdempotencyConflict           409 same event_id, a body of another meaning
      + PayloadTooLarge               413
-     + UnsupportedMediaType          415 a body that is not application/json
-     + UnprocessableNotification     422 valid JSON, impossible content
+     + UnsupportedMediaType          415 neither application/json nor VEDS XML
+     + UnprocessableNotification     422 valid JSON or XML, impossible content
      + StoreUnavailable              503 neither the store nor the spool can record
 
 Every handler answers ``application/problem+json`` with ``type``, ``title``,
@@ -40,6 +41,7 @@ __all__ = [
     "Forbidden",
     "IdempotencyConflict",
     "MalformedBody",
+    "MalformedXml",
     "NotFound",
     "PayloadTooLarge",
     "Problem",
@@ -150,6 +152,16 @@ class EngineFailure(DomainError):
 
 class MalformedBody(DomainError):
     status, slug, title = 400, "malformed-json", "Malformed JSON"
+
+
+class MalformedXml(DomainError):
+    """A VEDS body that is not one well-formed XML document the service may safely read.
+
+    Also a document type declaration (no entities, internal or external), nesting
+    or an element count over the limits, or an encoding other than UTF-8.
+    """
+
+    status, slug, title = 400, "malformed-xml", "Malformed or refused XML"
 
 
 class UnsupportedMediaType(DomainError):

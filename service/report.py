@@ -264,6 +264,10 @@ class CaseRecord:
     notification: Mapping[str, Any]
     result: Mapping[str, Any]
     models: Mapping[str, Any]
+    #: ``json`` or ``veds``: how the notification came in
+    source_format: str = "json"
+    #: for VEDS: the mapping record (version, vehicle, mapped, assumed, ignored)
+    source_mapping: Mapping[str, Any] | None = None
 
 
 @dataclass(frozen=True)
@@ -414,6 +418,11 @@ class AuditView:
     engine_version: str
     models: tuple[tuple[str, str, str], ...]
     timings: tuple[tuple[str, str], ...]
+    #: ``json`` or ``veds``, and how the page says it
+    source_format: str = "json"
+    source_text: str = "JSON notification"
+    #: for VEDS: the vehicle as the document names it (make, model, year), or empty
+    vehicle_text: str = ""
 
 
 @dataclass(frozen=True)
@@ -671,6 +680,24 @@ def _crash_view(
     )
 
 
+def _source_view(record: CaseRecord) -> dict[str, str]:
+    """How the audit trail says the case came in (JSON, or VEDS XML mapped to it)."""
+    if record.source_format != "veds":
+        return {"source_format": "json", "source_text": "JSON notification", "vehicle_text": ""}
+    mapping = record.source_mapping if isinstance(record.source_mapping, Mapping) else {}
+    version = str(mapping.get("veds_version", "")).strip()
+    vehicle = _map(mapping, "vehicle")
+    named = " ".join(
+        str(vehicle[k]) for k in ("make", "model", "model_year") if vehicle.get(k) is not None
+    )
+    return {
+        "source_format": "veds",
+        "source_text": f"VEDS {version} XML (RFC 8148), mapped to a notification; the document "
+        "is kept with the case",
+        "vehicle_text": named,
+    }
+
+
 def build_case_view(record: CaseRecord, *, now: datetime) -> CaseView:
     """The case page's view of a stored case (nothing is recomputed)."""
     result, notification = record.result, record.notification
@@ -713,6 +740,7 @@ def build_case_view(record: CaseRecord, *, now: datetime) -> CaseView:
         engine_version=record.engine_version,
         models=models,
         timings=tuple((str(k), f"{v:.1f} ms") for k, v in timings.items() if _num(v) is not None),
+        **_source_view(record),
     )
     return CaseView(
         case_id=record.case_id,
@@ -787,6 +815,8 @@ def load_case_record(sessions: sessionmaker[Session], case_id: str) -> CaseRecor
             notification=case.notification,
             result=case.result,
             models=case.models,
+            source_format=case.source_format,
+            source_mapping=case.source_mapping,
         )
 
 

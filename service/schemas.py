@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 import re
+from dataclasses import dataclass
 from datetime import UTC, datetime, timedelta
 from typing import Annotated, Any, Literal
 
@@ -46,7 +47,9 @@ __all__ = [
     "CrashNotificationIn",
     "DeltaVPulseIn",
     "OccupantIn",
+    "ReceivedSource",
     "Rfc3339Text",
+    "SourceFormat",
     "StoredCase",
     "SummaryPulseIn",
     "VehicleIn",
@@ -606,6 +609,40 @@ class CrashNotificationIn(WireModel):
         )
 
 
+#: How a notification came in.
+SourceFormat = Literal["json", "veds"]
+
+
+@dataclass(frozen=True)
+class ReceivedSource:
+    """A notification that came in as another format than this contract's JSON.
+
+    Attributes
+    ----------
+    format : {"veds"}
+    document : str
+        The document exactly as received (kept with the case for audit).
+    mapping : dict
+        Which of its elements became which fields, what was assumed, what was not
+        used (JSON-serialisable; stored with the case).
+    assumptions : tuple of Assumption
+        What the mapping assumed; added to the answer's assumptions.
+    occurred_at_assumed : bool
+        The crash time is not the document's own (it had none): idempotency then
+        fingerprints the notification without it, so that a re-sent document replays.
+    """
+
+    format: SourceFormat
+    document: str
+    mapping: dict[str, Any]
+    assumptions: tuple[Assumption, ...] = ()
+    occurred_at_assumed: bool = False
+
+    def record(self) -> dict[str, Any]:
+        """The JSON form kept with the case (and in the spool)."""
+        return {"format": self.format, "document": self.document, "mapping": self.mapping}
+
+
 # ------------------------------------------------------------------------- results
 
 
@@ -842,9 +879,26 @@ class StoredCase(OutModel):
     received_at: datetime = Field(description="When the notification was received.")
     stored_at: datetime = Field(description="When the case was committed.")
     request_sha256: str = Field(description="SHA-256 of the canonical JSON of the notification.")
-    notification: dict[str, Any] = Field(description="The notification as received.")
+    notification: dict[str, Any] = Field(
+        description="The notification as received; for a VEDS document, the JSON notification "
+        "it was mapped to (the XML itself is `source_document`)."
+    )
     result: CaseResult = Field(description="The result exactly as it was answered.")
     models: dict[str, ModelVersionOut] = Field(description="Every model used: version, sha256.")
+    source_format: SourceFormat = Field(
+        default="json",
+        description="How the notification came in: `json` (this contract) or `veds` "
+        "(`application/EmergencyCallData.VEDS+xml`, RFC 8148).",
+    )
+    source_document: str | None = Field(
+        default=None,
+        description="The VEDS XML document exactly as received (null for JSON).",
+    )
+    source_mapping: dict[str, Any] | None = Field(
+        default=None,
+        description="For VEDS: which elements were mapped to which fields, what was assumed "
+        "(assumption codes) and what was not used (null for JSON).",
+    )
 
 
 class CaseSummary(OutModel):

@@ -13,7 +13,7 @@ one replay at a time, which also keeps the order).
 Tables::
 
     spool(seq, client_name, event_id, request_sha256, case_id, received_at,
-          spooled_at, notification, result)   UNIQUE(client_name, event_id)
+          spooled_at, notification, result, source)   UNIQUE(client_name, event_id)
     probe(id, at)                              readiness write check
 """
 
@@ -52,10 +52,18 @@ _SCHEMA = (
         spooled_at TEXT NOT NULL,
         notification TEXT NOT NULL,
         result TEXT NOT NULL,
+        source TEXT,
         UNIQUE (client_name, event_id)
     )""",
     "CREATE TABLE IF NOT EXISTS probe (id INTEGER PRIMARY KEY, at TEXT NOT NULL)",
 )
+
+
+def _add_source_column(conn: sqlite3.Connection) -> None:
+    """Give a spool file written before VEDS input its ``source`` column (idempotent)."""
+    columns = {row[1] for row in conn.execute("PRAGMA table_info(spool)")}
+    if "source" not in columns:
+        conn.execute("ALTER TABLE spool ADD COLUMN source TEXT")
 
 
 class SpoolError(Exception):
@@ -75,6 +83,9 @@ class SpoolEntry:
     spooled_at: datetime
     notification: Any
     result: dict[str, Any]
+    #: How the notification came in, when not as JSON (``ReceivedSource.record()``:
+    #: the VEDS document as received and its mapping); None for JSON.
+    source: dict[str, Any] | None = None
 
 
 def _entry(row: sqlite3.Row) -> SpoolEntry:
@@ -88,6 +99,7 @@ def _entry(row: sqlite3.Row) -> SpoolEntry:
         spooled_at=datetime.fromisoformat(row["spooled_at"]),
         notification=json.loads(row["notification"]),
         result=json.loads(row["result"]),
+        source=json.loads(row["source"]) if row["source"] is not None else None,
     )
 
 
@@ -123,6 +135,7 @@ class Spool:
                 conn.execute("PRAGMA journal_mode=WAL")
                 for statement in _SCHEMA:
                     conn.execute(statement)
+                _add_source_column(conn)
                 self._ready = True
             yield conn
         except sqlite3.Error as exc:
@@ -140,7 +153,8 @@ class Spool:
             try:
                 conn.execute(
                     "INSERT INTO spool (client_name, event_id, request_sha256, case_id, "
-                    "received_at, spooled_at, notification, result) VALUES (?,?,?,?,?,?,?,?)",
+                    "received_at, spooled_at, notification, result, source) "
+                    "VALUES (?,?,?,?,?,?,?,?,?)",
                     (
                         entry.client_name,
                         entry.event_id,
@@ -150,6 +164,9 @@ class Spool:
                         entry.spooled_at.isoformat(),
                         json.dumps(entry.notification, separators=(",", ":")),
                         json.dumps(entry.result, separators=(",", ":")),
+                        None
+                        if entry.source is None
+                        else json.dumps(entry.source, separators=(",", ":")),
                     ),
                 )
             except sqlite3.IntegrityError:

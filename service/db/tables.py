@@ -16,8 +16,10 @@ from sqlalchemy import (
     Integer,
     MetaData,
     String,
+    Text,
     TypeDecorator,
     UniqueConstraint,
+    text,
 )
 from sqlalchemy.orm import DeclarativeBase, Mapped, mapped_column, relationship
 
@@ -97,6 +99,12 @@ class Case(Base):
     notification: Mapped[dict[str, Any]]
     result: Mapped[dict[str, Any]]
     models: Mapped[dict[str, Any]]
+    #: How the notification came in: ``json`` (this contract) or ``veds`` (RFC 8148 XML).
+    source_format: Mapped[str] = mapped_column(String(16), server_default=text("'json'"))
+    #: A VEDS document exactly as received (None for JSON: `notification` is the body).
+    source_document: Mapped[str | None] = mapped_column(Text)
+    #: For VEDS: which elements became which fields, what was assumed, what was unused.
+    source_mapping: Mapped[dict[str, Any] | None] = mapped_column(JSON(none_as_null=True))
     engine_version: Mapped[str] = mapped_column(String(32))
     iss15_plus: Mapped[bool] = mapped_column(Boolean)
     probability: Mapped[float] = mapped_column(Float)

@@ -1,0 +1,916 @@
+"""VEDS crash notifications (RFC 8148): read safely, map to the JSON notification.
+
+An NG911 call center receives a vehicle's crash data as the Vehicle Emergency
+Data Set, ``application/EmergencyCallData.VEDS+xml`` (VEDS 3.1, namespace
+``http://www.veds.org/acn/3.1``; the 1.0 namespace is read the same way). This
+module reads such a document and maps it to the service's own wire model
+(:class:`~service.schemas.CrashNotificationIn`), so that triage, idempotency and
+storage are those of a JSON notification. What the mapping took from where, what
+it assumed (assumption codes) and what it left unused is recorded with the case
+(:class:`~service.schemas.ReceivedSource`).
+
+Reading is hardened (``defusedxml`` over the standard library's expat): a
+document type declaration is refused outright, so there are no entities,
+internal (entity expansion, "billion laughs") or external (XXE), and nothing is
+fetched; nesting deeper than :data:`MAX_DEPTH` or more than :data:`MAX_ELEMENTS`
+elements are refused while parsing; the body size limit is the service's
+(``AACN_MAX_BODY_BYTES``, 413). Every refusal is a 4xx problem naming the element
+(``veds:Crash/veds:CrashVehicle/veds:VehicleCrashPulse[1]/...``).
+
+What is mapped (``docs/api.md`` has the table):
+
+- ``veds:VehicleCrashPulse`` (one per impact): delta-V with its unit (KPH, or MPH
+  converted with :data:`KM_PER_MILE`), PDOF in clock hours (1-12, 12 frontal),
+  rollover quarter turns. The pulse with the largest delta-V becomes the summary
+  pulse; several pulses are multiple impacts.
+- ``veds:VehicleSeat``: location code (1 driver, 2 front passenger, 3-5 second row
+  left, middle, right), occupied, belt fastened (and monitored).
+- ``veds:Airbag``: category (FRONT; SIDE and CURTAIN) and deployed, given to the
+  seats they can protect (VEDS airbags name no seat).
+- ``veds:VehicleRolloverIndicator``, ``veds:MultipleImpactsIndicator``, the incident
+  id (``event_id``) and time (``occurred_at``); make, model and year are recorded.
+
+An unknown unit, a missing delta-V, a seat code that does not exist (or an
+occupied seat the service cannot triage: third row, front middle) are refused,
+never guessed. Personal data of the document (names, contacts, persons) are not
+mapped and never logged; the document itself is kept with the case for audit.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import io
+import json
+import re
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from datetime import datetime
+from decimal import Decimal
+from typing import Any, Final
+from xml.etree.ElementTree import Element, ParseError
+
+from defusedxml import DefusedXmlException
+from defusedxml.ElementTree import iterparse
+from pydantic import ValidationError
+
+from models import limits
+from models.assumptions import Assumption, AssumptionCode
+from models.notification import AirbagState, Seat
+from service.problems import FieldError, MalformedXml, UnprocessableNotification
+from service.schemas import CrashNotificationIn, ReceivedSource
+
+__all__ = [
+    "EXAMPLE_VEDS",
+    "KM_PER_MILE",
+    "MAX_DEPTH",
+    "MAX_ELEMENTS",
+    "VEDS_MEDIA_TYPE",
+    "VEDS_NAMESPACES",
+    "VedsNotification",
+    "clock_to_pdof_deg",
+    "delta_v_to_kmh",
+    "is_veds_media_type",
+    "read_veds",
+]
+
+#: The media type of RFC 8148 section 6 (compared case-insensitively).
+VEDS_MEDIA_TYPE: Final = "application/EmergencyCallData.VEDS+xml"
+#: VEDS namespaces read, with the version they stand for.
+VEDS_NAMESPACES: Final[dict[str, str]] = {
+    "http://www.veds.org/acn/3.1": "3.1",
+    "http://www.veds.org/acn/1.0": "1.0",
+}
+#: NIEM 2.0 core and justice (jxdm 4.1) namespaces of the elements VEDS borrows.
+NC_NAMESPACE: Final = "http://niem.gov/niem/niem-core/2.0"
+J_NAMESPACE: Final = "http://niem.gov/niem/domains/jxdm/4.1"
+
+#: Kilometres in one international mile, exactly (International Yard and Pound
+#: Agreement, 1959: 1 yd = 0.9144 m, 1 mi = 1760 yd = 1609.344 m). Applied in
+#: decimal arithmetic: an MPH value and its exact KPH twin give the same float.
+KM_PER_MILE: Final = Decimal("1.609344")
+#: Deepest element nesting accepted. [R] A VEDS 3.1 document nests 7 levels
+#: (root, Crash, CrashVehicle, VehicleCrashPulse, measure, value); 32 leaves room
+#: for extensions and refuses crafted nesting long before it costs anything.
+MAX_DEPTH: Final = 32
+#: Most elements accepted. [R] The full VEDS 3.1 example has about 130; 5,000 is
+#: room for many seats, airbags and pulses, and bounds the work on a crafted body.
+MAX_ELEMENTS: Final = 5_000
+
+#: VEDS seat location codes (VehicleSeatLocationCategoryCode) and the seats of
+#: the service; codes 6-8 (third row) and 9 (front row middle) have no seat here.
+SEAT_CODES: Final[dict[str, Seat | None]] = {
+    "1": Seat.DRIVER,
+    "2": Seat.FRONT_PASSENGER,
+    "3": Seat.REAR_LEFT,
+    "4": Seat.REAR_MIDDLE,
+    "5": Seat.REAR_RIGHT,
+    "6": None,
+    "7": None,
+    "8": None,
+    "9": None,
+}
+_SEAT_NAMES: Final = {
+    "6": "third row left",
+    "7": "third row middle",
+    "8": "third row right",
+    "9": "front row middle",
+}
+#: VEDS AirbagCategoryCode values; ROOF and SEAT (belt) airbags have no field here.
+AIRBAG_CATEGORIES: Final = frozenset({"FRONT", "SIDE", "CURTAIN", "ROOF", "SEAT"})
+#: Delta-V units (nc:MeasureUnitText) and their factor to km/h.
+DELTA_V_UNITS: Final[dict[str, Decimal]] = {"KPH": Decimal(1), "MPH": KM_PER_MILE}
+
+#: Notification fields VEDS cannot carry, and the code of what the engine then assumes
+#: (recorded in every VEDS case's mapping: "occupant age unknown" and the like).
+NOT_IN_VEDS: Final[tuple[tuple[str, AssumptionCode], ...]] = (
+    ("occupants[].age_years", AssumptionCode.AGE_IMPUTED),
+    ("occupants[].stature_cm, mass_kg", AssumptionCode.BMI_IMPUTED),
+    ("occupants[].body", AssumptionCode.BODY_UNKNOWN),
+    ("occupants[].posture_lumbar_flexion_deg", AssumptionCode.POSTURE_NOT_SENSED),
+    ("occupants[].seat_track_mm", AssumptionCode.SEAT_POSITION_NOT_SENSED),
+)
+
+_PREFIX_OF: Final = {NC_NAMESPACE: "nc", J_NAMESPACE: "j", **dict.fromkeys(VEDS_NAMESPACES, "veds")}
+#: xsd:decimal's lexical form (no exponent, no underscores, no NaN).
+_DECIMAL = re.compile(r"^[+-]?(\d{1,12}(\.\d{0,12})?|\.\d{1,12})$")
+_SMALL_INT = re.compile(r"^\+?\d{1,3}$")
+_EVENT_ID = re.compile(r"^[\x21-\x7e]{1,128}$")
+_ENCODING = re.compile(rb"^<\?xml[^>]*?encoding\s*=\s*[\"']([A-Za-z0-9._-]+)[\"']")
+_BOOLEANS: Final = {"true": True, "1": True, "false": False, "0": False}
+
+
+def _said(flag: bool | None) -> str:
+    return "absent" if flag is None else str(flag).lower()
+
+
+#: The OpenAPI example of a VEDS body (written for this service in the shape of the
+#: RFC 8148 example): a frontal crash at 20 MPH, a belted driver, a deployed airbag.
+EXAMPLE_VEDS: Final[dict[str, dict[str, str]]] = {
+    "veds_frontal": {
+        "summary": "VEDS 3.1, frontal crash in MPH",
+        "description": "20 MPH (32.19 km/h) at 12 o'clock; a belted driver whose frontal "
+        "airbag deployed. The incident id is the event_id.",
+        "value": """<?xml version="1.0" encoding="UTF-8"?>
+<veds:AutomatedCrashNotification xmlns:veds="http://www.veds.org/acn/3.1"
+    xmlns:nc="http://niem.gov/niem/niem-core/2.0">
+  <veds:Crash>
+    <nc:ActivityIdentification><nc:IdentificationID>tsp-7d1c2a90-0004</nc:IdentificationID>
+    </nc:ActivityIdentification>
+    <nc:ActivityDate><nc:DateTime>2026-11-23T08:15:30Z</nc:DateTime></nc:ActivityDate>
+    <veds:CrashVehicle>
+      <nc:ItemMakeName>Toyota</nc:ItemMakeName>
+      <nc:ItemModelName>Yaris</nc:ItemModelName>
+      <nc:ItemModelYearDate>2010</nc:ItemModelYearDate>
+      <veds:Airbag>
+        <veds:AirbagCategoryCode>FRONT</veds:AirbagCategoryCode>
+        <veds:AirbagDeployedIndicator>true</veds:AirbagDeployedIndicator>
+      </veds:Airbag>
+      <veds:VehicleCrashPulse>
+        <veds:CrashPulseChangeInVelocityMeasure>
+          <nc:MeasurePointValue>20</nc:MeasurePointValue>
+          <nc:MeasureUnitText>MPH</nc:MeasureUnitText>
+        </veds:CrashPulseChangeInVelocityMeasure>
+        <veds:CrashPulsePrincipalDirectionOfForceValue>12</veds:CrashPulsePrincipalDirectionOfForceValue>
+        <veds:CrashPulseRolloverQuarterTurnsValue>0</veds:CrashPulseRolloverQuarterTurnsValue>
+      </veds:VehicleCrashPulse>
+      <veds:VehicleSeat>
+        <veds:VehicleSeatLocationCategoryCode>1</veds:VehicleSeatLocationCategoryCode>
+        <veds:VehicleSeatOccupiedIndicator>true</veds:VehicleSeatOccupiedIndicator>
+        <veds:VehicleSeatbeltFastenedIndicator>true</veds:VehicleSeatbeltFastenedIndicator>
+      </veds:VehicleSeat>
+    </veds:CrashVehicle>
+  </veds:Crash>
+</veds:AutomatedCrashNotification>
+""",
+    }
+}
+
+
+def is_veds_media_type(content_type: str) -> bool:
+    """Whether a Content-Type header names the VEDS media type (parameters ignored)."""
+    return content_type.split(";", 1)[0].strip().lower() == VEDS_MEDIA_TYPE.lower()
+
+
+def delta_v_to_kmh(value: Decimal, unit: str) -> float:
+    """A delta-V magnitude in km/h from a VEDS value and its unit.
+
+    Parameters
+    ----------
+    value : Decimal
+        ``nc:MeasurePointValue`` as written (its sign is the direction of the velocity
+        change, which the PDOF gives; the magnitude is used).
+    unit : {"KPH", "MPH"}
+        ``nc:MeasureUnitText``.
+
+    Returns
+    -------
+    float
+        ``|value|`` km/h; MPH times :data:`KM_PER_MILE` in exact decimal arithmetic,
+        rounded to a float once, so that ``20`` MPH and ``32.18688`` KPH are the same.
+    """
+    return float(abs(value) * DELTA_V_UNITS[unit])
+
+
+def clock_to_pdof_deg(hour: int) -> float:
+    """PDOF in degrees clockwise from straight ahead, from a clock direction 1-12.
+
+    12 o'clock is frontal (0 deg), 3 the right side (90), 6 the rear (180), 9 the
+    left side (270): 30 deg an hour.
+    """
+    return float((hour % 12) * 30)
+
+
+@dataclass(frozen=True)
+class VedsNotification:
+    """A VEDS document mapped to the service's notification.
+
+    Attributes
+    ----------
+    notification : CrashNotificationIn
+        The validated notification the document maps to.
+    document : dict
+        Its JSON form (what a JSON client would have sent), stored as the case's
+        notification.
+    source : ReceivedSource
+        The XML as received, the mapping record and its assumptions.
+    """
+
+    notification: CrashNotificationIn
+    document: dict[str, Any]
+    source: ReceivedSource
+
+
+# --------------------------------------------------------------------- reading
+
+
+def _refuse_xml(reason: str, *, field: str = "body", kind: str = "xml_malformed") -> MalformedXml:
+    return MalformedXml(
+        f"The VEDS document was refused: {reason}",
+        errors=[FieldError(field=field, reason=reason, type=kind)],
+    )
+
+
+def _qualified(tag: str) -> str:
+    """``{namespace}Local`` as ``prefix:Local`` (the namespace itself when unknown)."""
+    if tag.startswith("{"):
+        ns, _, local = tag[1:].partition("}")
+        prefix = _PREFIX_OF.get(ns)
+        return f"{prefix}:{local}" if prefix else tag
+    return tag
+
+
+def _check_encoding(raw: bytes) -> None:
+    if raw.startswith((b"\xff\xfe", b"\xfe\xff", b"\x00", b"\x4c\x6f\xa7\x94")):
+        raise _refuse_xml("the document must be encoded in UTF-8", kind="xml_encoding")
+    body = raw[3:] if raw.startswith(b"\xef\xbb\xbf") else raw
+    declared = _ENCODING.match(body.lstrip())
+    if declared and declared.group(1).decode("ascii").lower() not in ("utf-8", "utf8", "us-ascii"):
+        raise _refuse_xml(
+            f"the declared encoding {declared.group(1).decode('ascii')!r} is not accepted; "
+            "send UTF-8",
+            kind="xml_encoding",
+        )
+    try:
+        body.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        raise _refuse_xml(f"invalid UTF-8 at byte {exc.start}", kind="xml_encoding") from exc
+
+
+def parse_xml(raw: bytes) -> Element:
+    """Parse one XML document safely; returns its root element.
+
+    Raises
+    ------
+    MalformedXml
+        Not UTF-8; a document type declaration (and so any entity); not well-formed;
+        nesting deeper than `MAX_DEPTH`; more than `MAX_ELEMENTS` elements.
+    """
+    if not raw.strip():
+        raise _refuse_xml("the body is empty", kind="xml_empty")
+    _check_encoding(raw)
+    root: Element | None = None
+    depth = count = 0
+    path: list[str] = []
+    events: Iterator[tuple[str, Element]] = iterparse(
+        io.BytesIO(raw),
+        events=("start", "end"),
+        forbid_dtd=True,
+        forbid_entities=True,
+        forbid_external=True,
+    )
+    try:
+        for event, element in events:
+            if event == "end":
+                depth -= 1
+                path.pop()
+                continue
+            depth += 1
+            count += 1
+            path.append(_qualified(element.tag))
+            if root is None:
+                root = element
+            if depth > MAX_DEPTH:
+                raise _refuse_xml(
+                    f"elements nest deeper than {MAX_DEPTH} levels",
+                    field="/".join(path[1 : MAX_DEPTH + 2]),
+                    kind="xml_too_deep",
+                )
+            if count > MAX_ELEMENTS:
+                raise _refuse_xml(
+                    f"more than {MAX_ELEMENTS} elements",
+                    field="/".join(path[1:]),
+                    kind="xml_too_many_elements",
+                )
+    except DefusedXmlException as exc:
+        raise _refuse_xml(
+            "a document type declaration (DOCTYPE) is not accepted: VEDS needs none, and "
+            f"it would carry entities ({type(exc).__name__})",
+            kind="xml_dtd_forbidden",
+        ) from exc
+    except ParseError as exc:
+        raise _refuse_xml(f"not well-formed XML: {exc}") from exc
+    if root is None:  # pragma: no cover - expat refuses a document without an element
+        raise _refuse_xml("no root element")
+    return root
+
+
+# --------------------------------------------------------------------- mapping
+
+
+def _unprocessable(errors: list[FieldError]) -> UnprocessableNotification:
+    n = len(errors)
+    return UnprocessableNotification(
+        f"The VEDS document cannot be triaged: {n} element{'s' if n != 1 else ''} refused.",
+        errors=errors,
+    )
+
+
+def _refuse(path: str, reason: str, kind: str) -> UnprocessableNotification:
+    return _unprocessable([FieldError(field=path, reason=reason, type=kind)])
+
+
+@dataclass
+class _Mapper:
+    """Reads one VEDS document's elements, recording what it maps and assumes."""
+
+    veds_ns: str
+    mapped: list[dict[str, Any]] = field(default_factory=list)
+    assumed: list[Assumption] = field(default_factory=list)
+    #: the notification field each assumption concerns (same order as `assumed`)
+    assumed_fields: list[str] = field(default_factory=list)
+    ignored: list[dict[str, str]] = field(default_factory=list)
+    #: JSON field path -> the element it came from (to name elements in errors)
+    paths: dict[str, str] = field(default_factory=dict)
+
+    def tag(self, name: str) -> str:
+        prefix, _, local = name.partition(":")
+        ns = {"veds": self.veds_ns, "nc": NC_NAMESPACE, "j": J_NAMESPACE}[prefix]
+        return f"{{{ns}}}{local}"
+
+    def all(self, parent: Element, name: str) -> list[Element]:
+        tag = self.tag(name)
+        return [child for child in parent if child.tag == tag]
+
+    def one(self, parent: Element, name: str, path: str, *, required: bool) -> Element | None:
+        found = self.all(parent, name)
+        here = f"{path}/{name}" if path else name
+        if len(found) > 1:
+            raise _refuse(here, f"appears {len(found)} times; one is expected", "veds_repeated")
+        if not found:
+            if required:
+                raise _refuse(here, "missing", "veds_missing")
+            return None
+        return found[0]
+
+    def text(self, parent: Element, name: str, path: str, *, required: bool) -> str | None:
+        element = self.one(parent, name, path, required=required)
+        if element is None:
+            return None
+        value = (element.text or "").strip()
+        if not value and required:
+            raise _refuse(f"{path}/{name}", "empty", "veds_missing")
+        return value or None
+
+    def need(self, parent: Element, name: str, path: str) -> Element:
+        """The one child `name` of `parent`, which must be there."""
+        found = self.one(parent, name, path, required=True)
+        assert found is not None  # one() raised otherwise
+        return found
+
+    def need_text(self, parent: Element, name: str, path: str) -> str:
+        """The text of the one child `name`, which must be there and not empty."""
+        value = self.text(parent, name, path, required=True)
+        assert value is not None  # text() raised otherwise
+        return value
+
+    def boolean(self, parent: Element, name: str, path: str, *, required: bool) -> bool | None:
+        value = self.text(parent, name, path, required=required)
+        if value is None:
+            return None
+        if value not in _BOOLEANS:
+            raise _refuse(
+                f"{path}/{name}",
+                f"{value!r} is not an xsd:boolean (true, false, 1, 0)",
+                "veds_boolean",
+            )
+        return _BOOLEANS[value]
+
+    def map(self, element: str, field_path: str, value: Any, note: str | None = None) -> None:
+        entry: dict[str, Any] = {"element": element, "field": field_path, "value": value}
+        if note:
+            entry["note"] = note
+        self.mapped.append(entry)
+        self.paths.setdefault(field_path, element)
+
+    def assume(
+        self, code: AssumptionCode, message: str, occupant: int | None = None, *, field: str
+    ) -> None:
+        self.assumed.append(Assumption(code, message, occupant))
+        self.assumed_fields.append(field)
+
+    def ignore(self, element: str, reason: str) -> None:
+        self.ignored.append({"element": element, "reason": reason})
+
+
+@dataclass(frozen=True)
+class _Pulse:
+    path: str
+    delta_v_kmh: float
+    pdof_deg: float
+    quarter_turns: int
+    written: str
+
+
+def _pulse(m: _Mapper, pulse: Element, path: str) -> _Pulse:
+    measure_path = f"{path}/veds:CrashPulseChangeInVelocityMeasure"
+    measure = m.need(pulse, "veds:CrashPulseChangeInVelocityMeasure", path)
+    value_text = m.need_text(measure, "nc:MeasurePointValue", measure_path)
+    unit = m.need_text(measure, "nc:MeasureUnitText", measure_path)
+    if not _DECIMAL.match(value_text):
+        raise _refuse(
+            f"{measure_path}/nc:MeasurePointValue",
+            f"{value_text!r} is not a decimal number",
+            "veds_number",
+        )
+    if unit.upper() not in DELTA_V_UNITS:
+        raise _refuse(
+            f"{measure_path}/nc:MeasureUnitText",
+            f"unknown delta-V unit {unit!r}: VEDS gives KPH or MPH",
+            "veds_unit",
+        )
+    unit = unit.upper()
+    delta_v_kmh = delta_v_to_kmh(Decimal(value_text), unit)
+    if delta_v_kmh == 0.0:
+        raise _refuse(
+            f"{measure_path}/nc:MeasurePointValue", "a delta-V of 0 is no crash pulse", "veds_range"
+        )
+    if delta_v_kmh > limits.MAX_DELTA_V_KMH:
+        raise _refuse(
+            f"{measure_path}/nc:MeasurePointValue",
+            f"{value_text} {unit} = {delta_v_kmh:.1f} km/h exceeds the plausible "
+            f"{limits.MAX_DELTA_V_KMH:g} km/h",
+            "veds_range",
+        )
+    pdof_path = f"{path}/veds:CrashPulsePrincipalDirectionOfForceValue"
+    clock = m.need_text(pulse, "veds:CrashPulsePrincipalDirectionOfForceValue", path)
+    if not _SMALL_INT.match(clock) or not 1 <= int(clock) <= 12:
+        raise _refuse(
+            pdof_path, f"{clock!r} is not a clock direction 1-12 (12 frontal)", "veds_clock"
+        )
+    turns_text = m.text(pulse, "veds:CrashPulseRolloverQuarterTurnsValue", path, required=False)
+    turns = 0
+    if turns_text is not None:
+        if not _SMALL_INT.match(turns_text):
+            raise _refuse(
+                f"{path}/veds:CrashPulseRolloverQuarterTurnsValue",
+                f"{turns_text!r} is not a non-negative integer below 1000",
+                "veds_number",
+            )
+        turns = int(turns_text)
+    return _Pulse(
+        path=path,
+        delta_v_kmh=delta_v_kmh,
+        pdof_deg=clock_to_pdof_deg(int(clock)),
+        quarter_turns=turns,
+        written=f"{value_text} {unit}, {int(clock)} o'clock",
+    )
+
+
+def _crash(
+    m: _Mapper, crash: Element, vehicle: Element, crash_path: str, vehicle_path: str
+) -> dict[str, Any]:
+    pulses = m.all(vehicle, "veds:VehicleCrashPulse")
+    if not pulses:
+        raise _refuse(
+            f"{vehicle_path}/veds:VehicleCrashPulse",
+            "missing: a crash pulse (delta-V and its direction) is needed to triage",
+            "veds_missing",
+        )
+    read = [
+        _pulse(m, p, f"{vehicle_path}/veds:VehicleCrashPulse[{i + 1}]")
+        for i, p in enumerate(pulses)
+    ]
+    worst = max(read, key=lambda p: p.delta_v_kmh)  # the first of equals
+    value_path = f"{worst.path}/veds:CrashPulseChangeInVelocityMeasure/nc:MeasurePointValue"
+    m.map(value_path, "crash.pulse.delta_v_kmh", worst.delta_v_kmh, worst.written)
+    m.map(
+        f"{worst.path}/veds:CrashPulsePrincipalDirectionOfForceValue",
+        "crash.pulse.pdof_deg",
+        worst.pdof_deg,
+        "clock hours x 30 deg (12 o'clock = 0)",
+    )
+    m.paths["crash.pulse"] = worst.path
+    if len(read) > 1:
+        m.assume(
+            AssumptionCode.VEDS_MOST_SEVERE_PULSE,
+            f"{len(read)} crash pulses: the largest delta-V ({worst.written}) was triaged",
+            field="crash.pulse",
+        )
+
+    indicator = m.boolean(crash, "veds:MultipleImpactsIndicator", crash_path, required=False)
+    multiple = bool(indicator) or len(read) > 1
+    m.map(
+        f"{crash_path}/veds:MultipleImpactsIndicator"
+        if indicator is not None
+        else f"{vehicle_path}/veds:VehicleCrashPulse",
+        "crash.multiple_impacts",
+        multiple,
+        f"{len(read)} pulse(s); indicator {_said(indicator)}",
+    )
+    rolled = m.boolean(vehicle, "veds:VehicleRolloverIndicator", vehicle_path, required=False)
+    turns = max(p.quarter_turns for p in read)
+    rollover = bool(rolled) or turns > 0
+    m.map(
+        f"{vehicle_path}/veds:VehicleRolloverIndicator"
+        if rolled is not None
+        else f"{vehicle_path}/veds:VehicleCrashPulse",
+        "crash.rollover",
+        rollover,
+        f"indicator {_said(rolled)}; most quarter turns {turns}",
+    )
+    return {
+        "pulse": {
+            "kind": "summary",
+            "delta_v_kmh": worst.delta_v_kmh,
+            "pdof_deg": worst.pdof_deg,
+        },
+        "multiple_impacts": multiple,
+        "rollover": rollover,
+    }
+
+
+def _airbag_states(m: _Mapper, vehicle: Element, vehicle_path: str) -> dict[str, list[bool]]:
+    """Reported deployed flags per airbag group (``frontal``: FRONT, ``side``: SIDE, CURTAIN)."""
+    groups: dict[str, list[bool]] = {"frontal": [], "side": []}
+    for i, bag in enumerate(m.all(vehicle, "veds:Airbag")):
+        path = f"{vehicle_path}/veds:Airbag[{i + 1}]"
+        category = m.need_text(bag, "veds:AirbagCategoryCode", path)
+        if category.upper() not in AIRBAG_CATEGORIES:
+            raise _refuse(
+                f"{path}/veds:AirbagCategoryCode",
+                f"unknown airbag category {category!r}: VEDS gives "
+                + ", ".join(sorted(AIRBAG_CATEGORIES)),
+                "veds_airbag_category",
+            )
+        category = category.upper()
+        deployed = m.boolean(bag, "veds:AirbagDeployedIndicator", path, required=False)
+        if category in ("ROOF", "SEAT"):
+            m.ignore(path, f"{category} airbags have no field in the notification")
+        elif deployed is None:
+            m.ignore(path, "no veds:AirbagDeployedIndicator: its state is unknown")
+        else:
+            groups["frontal" if category == "FRONT" else "side"].append(deployed)
+    return groups
+
+
+def _group_state(flags: list[bool]) -> AirbagState | None:
+    """The state all reported airbags of a group share; None when they disagree or none."""
+    if not flags or (any(flags) and not all(flags)):
+        return None
+    return AirbagState.DEPLOYED if flags[0] else AirbagState.NOT_DEPLOYED
+
+
+def _occupants(m: _Mapper, vehicle: Element, vehicle_path: str) -> list[dict[str, Any]]:
+    bags = _airbag_states(m, vehicle, vehicle_path)
+    frontal = _group_state(bags["frontal"])
+    side = _group_state(bags["side"])
+    occupants: list[dict[str, Any]] = []
+    seen: dict[Seat, str] = {}
+    seats = m.all(vehicle, "veds:VehicleSeat")
+    for i, seat_element in enumerate(seats):
+        path = f"{vehicle_path}/veds:VehicleSeat[{i + 1}]"
+        code_path = f"{path}/veds:VehicleSeatLocationCategoryCode"
+        code = m.need_text(seat_element, "veds:VehicleSeatLocationCategoryCode", path)
+        if code not in SEAT_CODES:
+            raise _refuse(
+                code_path,
+                f"{code!r} is not a VEDS seat location code (1-9)",
+                "veds_seat_code",
+            )
+        occupied = m.boolean(seat_element, "veds:VehicleSeatOccupiedIndicator", path, required=True)
+        if not occupied:
+            m.ignore(path, f"seat code {code} not occupied")
+            continue
+        seat = SEAT_CODES[code]
+        if seat is None:
+            raise _refuse(
+                code_path,
+                f"seat code {code} ({_SEAT_NAMES[code]}) is occupied, and the service triages "
+                "the front row (codes 1, 2) and the second row (3-5) only",
+                "veds_seat_unsupported",
+            )
+        if seat in seen:
+            raise _refuse(
+                code_path,
+                f"seat code {code} appears twice (first at {seen[seat]})",
+                "veds_seat_repeated",
+            )
+        seen[seat] = path
+        index = len(occupants)
+        prefix = f"occupants[{index}]"
+        m.map(code_path, f"{prefix}.seat", seat.value, f"code {code}")
+        m.paths[prefix] = path
+
+        fastened = m.boolean(
+            seat_element, "veds:VehicleSeatbeltFastenedIndicator", path, required=False
+        )
+        monitored = m.boolean(
+            seat_element, "veds:VehicleSeatbeltMonitoredIndicator", path, required=False
+        )
+        if fastened is None or monitored is False:
+            belted = False
+            why = "not reported" if fastened is None else "not monitored"
+            m.assume(
+                AssumptionCode.VEDS_BELT_NOT_REPORTED,
+                f"{prefix}: belt {why} (seat code {code}): unbelted assumed",
+                index,
+                field=f"{prefix}.belted",
+            )
+        else:
+            belted = fastened
+            m.map(f"{path}/veds:VehicleSeatbeltFastenedIndicator", f"{prefix}.belted", belted)
+
+        occupant: dict[str, Any] = {"seat": seat.value, "belted": belted}
+        if seat.front_row:
+            occupant["frontal_airbag"] = (frontal or AirbagState.NOT_DEPLOYED).value
+        else:
+            occupant["frontal_airbag"] = AirbagState.ABSENT.value
+            m.map(
+                f"{vehicle_path}/veds:Airbag",
+                f"{prefix}.frontal_airbag",
+                "absent",
+                "second row: no frontal airbag in front of it",
+            )
+        if side is not None:
+            occupant["side_airbag"] = side.value
+        occupants.append(occupant)
+
+    if not occupants:
+        raise _refuse(
+            f"{vehicle_path}/veds:VehicleSeat",
+            "no occupied seat: at least one occupied veds:VehicleSeat is needed to triage",
+            "veds_missing",
+        )
+    _note_airbags(m, occupants, bags, frontal, side, vehicle_path)
+    return occupants
+
+
+def _note_airbags(
+    m: _Mapper,
+    occupants: list[dict[str, Any]],
+    bags: dict[str, list[bool]],
+    frontal: AirbagState | None,
+    side: AirbagState | None,
+    vehicle_path: str,
+) -> None:
+    """Record how the airbags were given to seats (VEDS airbags name no seat)."""
+    element = f"{vehicle_path}/veds:Airbag"
+    front_row = [i for i, o in enumerate(occupants) if Seat(o["seat"]).front_row]
+    if front_row:
+        if not bags["frontal"]:
+            m.assume(
+                AssumptionCode.VEDS_FRONTAL_AIRBAG_NOT_REPORTED,
+                "no FRONT airbag reported: front-row frontal airbags taken as not deployed",
+                field="occupants.frontal_airbag",
+            )
+        elif frontal is None:
+            m.assume(
+                AssumptionCode.VEDS_AIRBAG_AMBIGUOUS,
+                f"FRONT airbags disagree ({sum(bags['frontal'])} of {len(bags['frontal'])} "
+                "deployed) and name no seat: front-row frontal airbags taken as not deployed",
+                field="occupants.frontal_airbag",
+            )
+        else:
+            m.assume(
+                AssumptionCode.VEDS_AIRBAG_BY_CATEGORY,
+                f"every reported FRONT airbag ({len(bags['frontal'])}) is {frontal.value}: "
+                "given to each front-row seat",
+                field="occupants.frontal_airbag",
+            )
+        for i in front_row:
+            m.map(element, f"occupants[{i}].frontal_airbag", occupants[i]["frontal_airbag"])
+    if bags["side"] and side is None:
+        m.assume(
+            AssumptionCode.VEDS_AIRBAG_AMBIGUOUS,
+            f"SIDE/CURTAIN airbags disagree ({sum(bags['side'])} of {len(bags['side'])} "
+            "deployed) and name no seat: side airbags not reported",
+            field="occupants.side_airbag",
+        )
+    elif side is not None:
+        m.assume(
+            AssumptionCode.VEDS_AIRBAG_BY_CATEGORY,
+            f"every reported SIDE/CURTAIN airbag ({len(bags['side'])}) is {side.value}: "
+            "given to each seat",
+            field="occupants.side_airbag",
+        )
+        for i in range(len(occupants)):
+            m.map(element, f"occupants[{i}].side_airbag", side.value)
+
+
+def _first_time(m: _Mapper, parent: Element, name: str, path: str) -> tuple[str, str] | None:
+    holder = m.one(parent, name, path, required=False)
+    if holder is None:
+        return None
+    here = f"{path}/{name}" if path else name
+    value = m.text(holder, "nc:DateTime", here, required=False)
+    return (value, f"{here}/nc:DateTime") if value else None
+
+
+def _occurred_at(
+    m: _Mapper, root: Element, crash: Element, crash_path: str, received_at: datetime
+) -> tuple[str, bool]:
+    """The crash time as RFC 3339 text, and whether it was assumed."""
+    own = _first_time(m, crash, "nc:ActivityDate", crash_path)
+    if own is not None:
+        m.map(own[1], "occurred_at", own[0])
+        return own[0], False
+    for name in ("nc:DocumentReceivedDate", "nc:DocumentPostDate"):
+        found = _first_time(m, root, name, "")
+        if found is not None:
+            m.map(found[1], "occurred_at", found[0], "no incident time: this time used")
+            m.assume(
+                AssumptionCode.VEDS_CRASH_TIME_ASSUMED,
+                f"no incident time: {found[1]} taken as the crash time",
+                field="occurred_at",
+            )
+            m.paths["occurred_at"] = found[1]
+            return found[0], True
+    m.assume(
+        AssumptionCode.VEDS_CRASH_TIME_ASSUMED,
+        "no time in the document: the time the service received it taken as the crash time",
+        field="occurred_at",
+    )
+    return received_at.isoformat(), True
+
+
+def _event_id(m: _Mapper, crash: Element, crash_path: str, raw: bytes) -> str:
+    ident = m.one(crash, "nc:ActivityIdentification", crash_path, required=False)
+    if ident is not None:
+        path = f"{crash_path}/nc:ActivityIdentification"
+        value = m.text(ident, "nc:IdentificationID", path, required=False)
+        if value is not None:
+            if not _EVENT_ID.match(value):
+                raise _refuse(
+                    f"{path}/nc:IdentificationID",
+                    "the incident id must be 1-128 printable ASCII characters without spaces "
+                    "(it is the event_id)",
+                    "veds_incident_id",
+                )
+            m.map(f"{path}/nc:IdentificationID", "event_id", value)
+            return value
+    digest = "veds-sha256:" + hashlib.sha256(raw).hexdigest()
+    m.map("(the document)", "event_id", digest, "no incident id: SHA-256 of the document")
+    return digest
+
+
+def _vehicle_facts(m: _Mapper, vehicle: Element, vehicle_path: str) -> dict[str, str | None]:
+    facts = {
+        "make": m.text(vehicle, "nc:ItemMakeName", vehicle_path, required=False),
+        "model": m.text(vehicle, "nc:ItemModelName", vehicle_path, required=False),
+        "model_year": m.text(vehicle, "nc:ItemModelYearDate", vehicle_path, required=False),
+        "body_category_code": m.text(
+            vehicle, "j:VehicleBodyCategoryCode", vehicle_path, required=False
+        ),
+    }
+    m.assume(
+        AssumptionCode.VEDS_VEHICLE_CLASS_ASSUMED,
+        "the occupant models' default vehicle class (compact_sedan) used for "
+        + (
+            " ".join(v for v in (facts["make"], facts["model"], facts["model_year"]) if v)
+            or "an unnamed vehicle"
+        ),
+        field="vehicle.model",
+    )
+    m.assume(
+        AssumptionCode.VEDS_DRIVE_SIDE_ASSUMED,
+        "no drive side in VEDS: left-hand drive assumed",
+        field="vehicle.drive_side",
+    )
+    return facts
+
+
+def _field_of(loc: tuple[Any, ...]) -> str:
+    text = ""
+    for part in loc:
+        if isinstance(part, int):
+            text += f"[{part}]"
+        elif part not in ("summary",):
+            text += f".{part}" if text else str(part)
+    return text
+
+
+def _element_for(m: _Mapper, field_path: str) -> str:
+    """The element a JSON field came from (its nearest mapped parent's)."""
+    probe = field_path
+    while probe:
+        if probe in m.paths:
+            return m.paths[probe]
+        cut = max(probe.rfind("."), probe.rfind("["))
+        probe = probe[:cut] if cut > 0 else ""
+    return field_path
+
+
+def read_veds(raw: bytes, *, received_at: datetime) -> VedsNotification:
+    """Read a VEDS document and map it to the service's notification.
+
+    Parameters
+    ----------
+    raw : bytes
+        The request body (``application/EmergencyCallData.VEDS+xml``).
+    received_at : datetime
+        When the service received it: the crash time when the document has none.
+
+    Raises
+    ------
+    MalformedXml
+        400: not one safe, well-formed UTF-8 XML document (see `parse_xml`).
+    UnprocessableNotification
+        422: not VEDS (root element or namespace), or an element the notification
+        needs is missing or refused (unit, delta-V, PDOF, seat code, ...); each error
+        names the element.
+    """
+    root = parse_xml(raw)
+    ns, _, local = root.tag[1:].partition("}") if root.tag.startswith("{") else ("", "", root.tag)
+    if local != "AutomatedCrashNotification" or ns not in VEDS_NAMESPACES:
+        raise _refuse(
+            _qualified(root.tag),
+            "the root element must be veds:AutomatedCrashNotification in the VEDS namespace "
+            f"({' or '.join(VEDS_NAMESPACES)}); got {local!r} in "
+            f"{ns or 'no namespace'!r}",
+            "veds_root",
+        )
+    m = _Mapper(veds_ns=ns)
+    crash = m.need(root, "veds:Crash", "")
+    crash_path = "veds:Crash"
+    vehicle = m.need(crash, "veds:CrashVehicle", crash_path)
+    vehicle_path = f"{crash_path}/veds:CrashVehicle"
+
+    event_id = _event_id(m, crash, crash_path, raw)
+    occurred_at, time_assumed = _occurred_at(m, root, crash, crash_path, received_at)
+    crash_doc = _crash(m, crash, vehicle, crash_path, vehicle_path)
+    occupants = _occupants(m, vehicle, vehicle_path)
+    vehicle_facts = _vehicle_facts(m, vehicle, vehicle_path)
+    if m.all(root, "veds:Person") or m.all(crash, "veds:CrashPerson"):
+        m.ignore(
+            "veds:Person",
+            "persons are not linked to seats in VEDS: no occupant's age or sex is taken from them",
+        )
+    document: dict[str, Any] = {
+        "event_id": event_id,
+        "occurred_at": occurred_at,
+        "crash": crash_doc,
+        "occupants": occupants,
+    }
+    try:
+        notification = CrashNotificationIn.model_validate_json(json.dumps(document), strict=True)
+    except ValidationError as exc:
+        raise _unprocessable(
+            [
+                FieldError(
+                    field=_element_for(m, _field_of(tuple(e["loc"]))),
+                    reason=str(e["msg"]).removeprefix("Value error, "),
+                    type=str(e["type"]),
+                )
+                for e in exc.errors()
+            ]
+        ) from exc
+    mapping = {
+        "veds_version": VEDS_NAMESPACES[ns],
+        "namespace": ns,
+        "vehicle": vehicle_facts,
+        "mapped": m.mapped,
+        "assumed": [
+            {"code": a.code.value, "field": f, "message": a.message, "occupant": a.occupant}
+            for a, f in zip(m.assumed, m.assumed_fields, strict=True)
+        ],
+        "ignored": m.ignored,
+        "not_in_veds": [{"field": f, "code": code.value} for f, code in NOT_IN_VEDS],
+    }
+    source = ReceivedSource(
+        format="veds",
+        document=raw.decode("utf-8"),
+        mapping=mapping,
+        assumptions=tuple(m.assumed),
+        occurred_at_assumed=time_assumed,
+    )
+    return VedsNotification(notification=notification, document=document, source=source)
