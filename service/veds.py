@@ -53,7 +53,7 @@ from defusedxml import DefusedXmlException
 from defusedxml.ElementTree import iterparse
 from pydantic import ValidationError
 
-from models import limits
+from models import limits, units
 from models.assumptions import Assumption, AssumptionCode
 from models.notification import AirbagState, Seat
 from service.problems import FieldError, MalformedXml, UnprocessableNotification
@@ -84,10 +84,10 @@ VEDS_NAMESPACES: Final[dict[str, str]] = {
 NC_NAMESPACE: Final = "http://niem.gov/niem/niem-core/2.0"
 J_NAMESPACE: Final = "http://niem.gov/niem/domains/jxdm/4.1"
 
-#: Kilometres in one international mile, exactly (International Yard and Pound
-#: Agreement, 1959: 1 yd = 0.9144 m, 1 mi = 1760 yd = 1609.344 m). Applied in
-#: decimal arithmetic: an MPH value and its exact KPH twin give the same float.
-KM_PER_MILE: Final = Decimal("1.609344")
+#: Kilometres in one international mile, exactly (:data:`models.units.KM_PER_MILE`,
+#: the one home of the constant), as a decimal. Applied in decimal arithmetic: an
+#: MPH value and its exact KPH twin give the same float.
+KM_PER_MILE: Final = Decimal(repr(units.KM_PER_MILE))
 #: Deepest element nesting accepted. [R] A VEDS 3.1 document nests 7 levels
 #: (root, Crash, CrashVehicle, VehicleCrashPulse, measure, value); 32 leaves room
 #: for extensions and refuses crafted nesting long before it costs anything.
