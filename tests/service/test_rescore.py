@@ -22,6 +22,7 @@ from service import cli
 from service.db.tables import Case, CaseOccupant
 from service.rescore import CSV_COLUMNS, rescore
 from service.settings import get_settings
+from service.veds import VEDS_MEDIA_TYPE
 from tests.conftest import _api
 from tests.support import ApiClient, summary
 
@@ -31,6 +32,9 @@ from tests.support import ApiClient, summary
 DELTA_V_KMH = (15.0, 25.0, 35.0, 40.0, 45.0, 55.0, 70.0, 90.0)
 
 RETIRED = "1.0.0"
+
+#: VEDS test documents (tests/service/veds/).
+VEDS_DIR = Path(__file__).parent / "veds"
 
 
 @pytest.fixture
@@ -54,12 +58,20 @@ def _snapshot(api: ApiClient) -> list[tuple[Any, ...]]:
 
 
 def _submit_cases(api: ApiClient) -> dict[str, dict[str, Any]]:
+    """The summary notifications of DELTA_V_KMH, and one VEDS document (issue 34)."""
     out = {}
     for i, dv in enumerate(DELTA_V_KMH):
         body = summary(dv, belted=i % 3 != 0, event_id=f"recall-{i}")
         r = api.client.post("/v1/cases", json=body, headers=api.headers("submitter"))
         assert r.status_code == 201, r.text
         out[r.json()["case_id"]] = r.json()
+    r = api.client.post(
+        "/v1/cases",
+        content=(VEDS_DIR / "mph-frontal.xml").read_bytes(),
+        headers={**api.headers("submitter"), "Content-Type": VEDS_MEDIA_TYPE},
+    )
+    assert r.status_code == 201, r.text
+    out[r.json()["case_id"]] = r.json()
     return out
 
 
@@ -79,7 +91,7 @@ def test_rescore_lists_the_changed_decisions_and_alters_nothing(old_api: ApiClie
 
     sessions = old_api.client.app.state.ctx.sessions  # type: ignore[attr-defined]
     report = rescore(sessions, load_engine_models())
-    assert report.cases == len(DELTA_V_KMH)
+    assert report.cases == len(DELTA_V_KMH) + 1
     assert not report.refused
     new_version = load_default().version
     for row in report.rows:
