@@ -42,9 +42,7 @@ def database(postgres_admin_url: str) -> Iterator[str]:
         admin.dispose()
 
 
-def test_a_replica_killed_mid_load_loses_and_doubles_nothing(
-    database: str, tmp_path: Path
-) -> None:
+def test_a_replica_killed_mid_load_loses_and_doubles_nothing(database: str, tmp_path: Path) -> None:
     binary = find_nginx()
     if binary is None:
         pytest.skip("no nginx binary: apt-get install nginx (.ci/run installs it)")
