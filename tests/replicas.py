@@ -241,6 +241,22 @@ http {{
             time.sleep(0.1)
         raise RuntimeError("nginx never answered /livez")
 
+    def passed_on(self) -> Counter[str]:
+        """What nginx's error log says it met at a replica (each time it passed the
+        request on to the next one, or gave up): refused, reset, closed mid-request."""
+        kinds = {
+            "Connection refused": "refused",
+            "Connection reset": "reset",
+            "prematurely closed": "closed_mid_request",
+            "timed out": "timed_out",
+            "no live upstreams": "no_live_upstream",
+        }
+        log = self.prefix / "error.log"
+        lines = log.read_text(errors="replace").splitlines() if log.exists() else []
+        return Counter(
+            f"nginx_{kind}" for line in lines for text, kind in kinds.items() if text in line
+        )
+
     def stop(self) -> None:
         if self.proc is not None and self.proc.poll() is None:
             self.proc.send_signal(signal.SIGQUIT)  # graceful: the master and its workers
@@ -337,6 +353,8 @@ class LoadReport:
     killed: str
     restarted_ready_at: int
     stored: dict[tuple[str, str], list[str]] = field(default_factory=dict)
+    #: What nginx met at the replicas (`Nginx.passed_on`).
+    nginx: Counter[str] = field(default_factory=Counter)
 
     def figures(self) -> dict[str, int]:
         """Counts for the results table (see the module docstring)."""
@@ -374,7 +392,8 @@ class LoadReport:
                 a.status is not None and a.status not in (200, 201, 202, 409) and a.status < 500
                 for a in self.answers
             ),
-            **{f"retried_{k}": v for k, v in sorted(retried.items())},
+            **{f"client_retried_{k}": v for k, v in sorted(retried.items())},
+            **dict(sorted(self.nginx.items())),
             "served_by_killed_after_restart": sum(
                 a.upstream.endswith(self.killed) and a.planned.number >= self.restarted_ready_at
                 for a in self.answers
@@ -493,6 +512,7 @@ def run_load(
     done = [a for a in answers if a is not None]
     assert len(done) == len(planned), f"{len(planned) - len(done)} requests never finished"
     report = LoadReport(answers=done, killed=victim_replica.address, restarted_ready_at=rejoin_at)
+    report.nginx = nginx.passed_on()
     report.stored = read_store(url, {a.case_id for a in done if a.case_id})
     return report
 
