@@ -26,9 +26,6 @@ from results_md import write_section
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-#: Replicas behind nginx.
-REPLICAS = 3
-
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
@@ -40,8 +37,7 @@ def main() -> None:
     from sqlalchemy import create_engine, text
 
     from tests.conftest import _start_cluster
-    from tests.replicas import LoadPlan, Nginx, Replica, find_nginx, prepare_database, run_load
-    from tests.support import free_port
+    from tests.replicas import REPLICAS, LoadPlan, deployment, find_nginx, run_load
 
     binary = find_nginx()
     if binary is None:
@@ -54,25 +50,11 @@ def main() -> None:
             conn.execute(text('CREATE DATABASE "aacn_bench"'))
         admin.dispose()
         url = cluster.admin_url.rsplit("/", 1)[0] + "/aacn_bench"
-        env, key = prepare_database(url, work)
-        replicas = [Replica(i, free_port(), work, env) for i in range(REPLICAS)]
-        nginx = Nginx(binary, work, [r.address for r in replicas])
-        try:
-            replicas[0].start()
-            replicas[0].wait_ready()
-            for r in replicas[1:]:
-                r.start()
-            for r in replicas[1:]:
-                r.wait_ready()
-            nginx.start()
-            plan = LoadPlan(requests=args.requests, threads=args.threads)
+        plan = LoadPlan(requests=args.requests, threads=args.threads)
+        with deployment(url, work, binary) as (nginx, replicas, key):
             t0 = time.perf_counter()
             report = run_load(nginx, replicas, key, plan, url, victim=1)
             elapsed = time.perf_counter() - t0
-        finally:
-            nginx.stop()
-            for r in replicas:
-                r.stop()
     finally:
         cluster.stop()
         shutil.rmtree(work, ignore_errors=True)

@@ -34,7 +34,8 @@ import threading
 import time
 import uuid
 from collections import Counter
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
+from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -47,15 +48,19 @@ from tests.support import create_key, free_port, summary, wait_ready
 
 __all__ = [
     "CLI",
+    "REPLICAS",
     "LoadPlan",
     "LoadReport",
     "Nginx",
     "Replica",
+    "deployment",
     "find_nginx",
     "prepare_database",
     "run_load",
 ]
 
+#: Replicas behind nginx (the recipe's figure).
+REPLICAS = 3
 #: The command line of this checkout's interpreter (never a PATH lookup).
 CLI = [sys.executable, "-m", "service.cli"]
 #: The repository's nginx site (the server block shared with the compose recipe).
@@ -267,6 +272,33 @@ http {{
                 self.proc.wait(timeout=30)
 
 
+@contextmanager
+def deployment(
+    url: str, work: Path, nginx_binary: str, replicas: int = REPLICAS
+) -> Iterator[tuple[Nginx, list[Replica], str]]:
+    """The plain-host recipe on `url`: migrated, a submitter key, the replicas ready
+    (the first alone, as it fills a cold numba cache), nginx in front of them.
+
+    Yields ``(nginx, replicas, key)``; everything is stopped afterwards.
+    """
+    env, key = prepare_database(url, work)
+    started = [Replica(i, free_port(), work, env) for i in range(replicas)]
+    nginx = Nginx(nginx_binary, work, [r.address for r in started])
+    try:
+        started[0].start()
+        started[0].wait_ready()
+        for r in started[1:]:
+            r.start()
+        for r in started[1:]:
+            r.wait_ready()
+        nginx.start()
+        yield nginx, started, key
+    finally:
+        nginx.stop()
+        for r in started:
+            r.stop()
+
+
 # ----------------------------------------------------------------------- load
 
 
@@ -392,6 +424,7 @@ class LoadReport:
                 a.status is not None and a.status not in (200, 201, 202, 409) and a.status < 500
                 for a in self.answers
             ),
+            "client_retries": sum(a.tries - 1 for a in self.answers),
             **{f"client_retried_{k}": v for k, v in sorted(retried.items())},
             **dict(sorted(self.nginx.items())),
             "served_by_killed_after_restart": sum(

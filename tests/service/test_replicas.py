@@ -12,56 +12,26 @@ it may retry, and why: `tests.replicas`).
 
 from __future__ import annotations
 
-import uuid
-from collections.abc import Iterator
+import os
 from pathlib import Path
 
 import pytest
-from sqlalchemy import create_engine, text
 
-from tests.replicas import LoadPlan, Nginx, Replica, find_nginx, prepare_database, run_load
-from tests.support import free_port
+from tests.replicas import LoadPlan, deployment, find_nginx, run_load
 
 pytestmark = pytest.mark.postgres
 
-#: Replicas behind nginx (the recipe's figure).
-REPLICAS = 3
 
-
-@pytest.fixture
-def database(postgres_admin_url: str) -> Iterator[str]:
-    name = "aacn_lb_" + uuid.uuid4().hex[:8]
-    admin = create_engine(postgres_admin_url, isolation_level="AUTOCOMMIT")
-    with admin.connect() as conn:
-        conn.execute(text(f'CREATE DATABASE "{name}"'))
-    try:
-        yield postgres_admin_url.rsplit("/", 1)[0] + "/" + name
-    finally:
-        with admin.connect() as conn:
-            conn.execute(text(f'DROP DATABASE IF EXISTS "{name}" WITH (FORCE)'))
-        admin.dispose()
-
-
-def test_a_replica_killed_mid_load_loses_and_doubles_nothing(database: str, tmp_path: Path) -> None:
+def test_a_replica_killed_mid_load_loses_and_doubles_nothing(
+    postgres_url: str, tmp_path: Path
+) -> None:
     binary = find_nginx()
     if binary is None:
+        if os.environ.get("CI"):
+            pytest.fail("no nginx binary in CI: .ci/run installs Debian's nginx")
         pytest.skip("no nginx binary: apt-get install nginx (.ci/run installs it)")
-    env, key = prepare_database(database, tmp_path)
-    replicas = [Replica(i, free_port(), tmp_path, env) for i in range(REPLICAS)]
-    nginx = Nginx(binary, tmp_path, [r.address for r in replicas])
-    try:
-        replicas[0].start()  # the first start fills the shared numba cache when it is cold
-        replicas[0].wait_ready()
-        for r in replicas[1:]:
-            r.start()
-        for r in replicas[1:]:
-            r.wait_ready()
-        nginx.start()
-        report = run_load(nginx, replicas, key, LoadPlan(), database, victim=1)
-    finally:
-        nginx.stop()
-        for r in replicas:
-            r.stop()
+    with deployment(postgres_url, tmp_path, binary) as (nginx, replicas, key):
+        report = run_load(nginx, replicas, key, LoadPlan(), postgres_url, victim=1)
     figures = report.figures()
     assert not report.problems(), (report.problems()[:20], figures)
     assert figures["duplicates"] == 0
