@@ -73,8 +73,9 @@ nginx with `deploy/nginx/aacn-triage.conf`; {plan.requests} POSTs from {plan.thr
 {plan.conflict_share:.0%} with another delta-V); replica 2 killed with SIGKILL once \
 {plan.kill_at:.0%} of the plan was under way, started again at once; the last \
 {1 - plan.rejoin_at:.0%} held until it was ready. A client retries (same body) only after \
-502/503/504 or a broken connection. {elapsed:.0f} s in all, start of the restarted replica \
-included (not a speed figure).
+502/503/504 or a broken connection. {elapsed:.0f} s in all; the killed replica answered \
+`/readyz` {report.restart_ready_s:.1f} s after its restart (the kernels from the shared numba \
+cache, under this load).
 
 | figure | count |
 |---|---:|

@@ -387,6 +387,8 @@ class LoadReport:
     stored: dict[tuple[str, str], list[str]] = field(default_factory=dict)
     #: What nginx met at the replicas (`Nginx.passed_on`).
     nginx: Counter[str] = field(default_factory=Counter)
+    #: From the killed replica's restart to its first ready answer, s (not asserted).
+    restart_ready_s: float = 0.0
 
     def figures(self) -> dict[str, int]:
         """Counts for the results table (see the module docstring)."""
@@ -527,6 +529,7 @@ def run_load(
     for t in threads:
         t.start()
     victim_replica = replicas[victim]
+    restart_ready_s = float("nan")
     try:
         while time.monotonic() < deadline:  # kill once that much of the plan is under way
             with lock:
@@ -535,8 +538,10 @@ def run_load(
             time.sleep(0.01)
         victim_replica.kill9()
         killed.set()
+        restarted = time.monotonic()
         victim_replica.start()
         victim_replica.wait_ready()
+        restart_ready_s = time.monotonic() - restarted
         time.sleep(FAIL_TIMEOUT_S + 0.5)  # nginx tries a failed replica again after this
     finally:
         rejoined.set()
@@ -544,7 +549,12 @@ def run_load(
             t.join(max(1.0, deadline - time.monotonic()))
     done = [a for a in answers if a is not None]
     assert len(done) == len(planned), f"{len(planned) - len(done)} requests never finished"
-    report = LoadReport(answers=done, killed=victim_replica.address, restarted_ready_at=rejoin_at)
+    report = LoadReport(
+        answers=done,
+        killed=victim_replica.address,
+        restarted_ready_at=rejoin_at,
+        restart_ready_s=restart_ready_s,
+    )
     report.nginx = nginx.passed_on()
     report.stored = read_store(url, {a.case_id for a in done if a.case_id})
     return report
