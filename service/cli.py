@@ -7,13 +7,15 @@ Commands::
     aacn-triage keys create --role submitter|auditor|admin|metrics --name NAME
     aacn-triage keys list | keys revoke NAME|ID | keys rotate NAME|ID
     aacn-triage triage FILE.json
-    aacn-triage triage --batch IN.jsonl --out OUT.jsonl [--resume] [--workers N]
+    aacn-triage triage --batch IN.jsonl|IN.parquet --out OUT.jsonl [--resume]
+                       [--workers N | --scheduler tcp://HOST:8786]
     aacn-triage simulate FILE.json [--plot OUT.png]
     aacn-triage build-surrogates [--family NAME] [--workers N] ...
     aacn-triage validate-surrogates [--n N] [--seed S] [--family NAME] ...
     aacn-triage baseline fit [--data CSV] [--out JSON]
     aacn-triage fit-field [--out DIR] [--artifact JSON] [--cache DIR]
     aacn-triage evaluate FILE [--labels LABELS] [--out DIR] [--operating-point NAME]
+                         [--workers N | --scheduler tcp://HOST:8786]
     aacn-triage cases rescore --model VERSION [--out FILE.csv] [--operating-point NAME]
 """
 
@@ -260,6 +262,9 @@ def _evaluate_text(text: str, models: Any) -> dict[str, Any]:
 def _cmd_triage(args: argparse.Namespace) -> int:
     from service.context import engine_models_for
 
+    if args.batch is not None and args.scheduler:  # on a Dask cluster (service.batch_dask)
+        return _run_batch_on_dask(args)
+
     try:
         models = engine_models_for(_settings())
     except ValueError as exc:
@@ -298,12 +303,43 @@ def _init_batch_worker() -> None:
 
 
 def _batch_line(item: tuple[int, str]) -> str:
-    number, text = item
+    return _batch_record(*item, _BATCH_MODELS)
+
+
+def _batch_record(number: int, text: str, models: Any) -> str:
+    """One output line of a batch: the answer to input line `number`, or its error."""
     if not text.strip():
         record: dict[str, Any] = {"line": number, "error": {"title": "Empty line"}}
     else:
-        record = {"line": number, **_evaluate_text(text, _BATCH_MODELS)}
+        record = {"line": number, **_evaluate_text(text, models)}
     return json.dumps(record, separators=(",", ":"))
+
+
+def _run_batch_on_dask(args: argparse.Namespace) -> int:
+    """`triage --batch` on the Dask cluster at ``--scheduler`` (service.batch_dask)."""
+    if args.out is None:
+        _print("error: --batch needs --out OUT.jsonl", err=True)
+        return 2
+    try:
+        from service.batch_dask import triage_batch_on_dask
+
+        evaluated, refused = triage_batch_on_dask(
+            Path(args.batch),
+            Path(args.out),
+            scheduler=args.scheduler,
+            settings=_settings(),
+            record=_batch_record,
+            resume=args.resume,
+        )
+    except (RuntimeError, ValueError, OSError) as exc:
+        _print(f"error: {exc}", err=True)
+        return 1
+    _print(
+        f"{evaluated} evaluated on the Dask cluster at {args.scheduler}, {refused} refused; "
+        f"results in {args.out}",
+        err=True,
+    )
+    return 0
 
 
 def _run_batch(src: Path, out: Path, models: Any, *, resume: bool, workers: int = 1) -> int:
@@ -322,20 +358,10 @@ def _run_batch(src: Path, out: Path, models: Any, *, resume: bool, workers: int 
 
     global _BATCH_MODELS
 
-    lines = src.read_text(encoding="utf-8").splitlines()
-    done = 0
-    if resume and out.exists():
-        kept = []
-        for raw in out.read_text(encoding="utf-8").splitlines():
-            try:
-                json.loads(raw)
-            except json.JSONDecodeError:
-                break  # a torn last line from an interrupted run: redo it
-            kept.append(raw)
-        done = len(kept)
-        out.write_text("".join(k + "\n" for k in kept), encoding="utf-8")
-    elif out.exists():
-        out.unlink()
+    from service.batch_io import keep_complete_lines, read_texts
+
+    lines = read_texts(src)  # JSON Lines or Parquet (service.batch_io)
+    done = keep_complete_lines(out, resume=resume)
     failures = 0
     todo = list(enumerate(lines[done:], start=done + 1))
     workers = max(1, min(workers, len(todo)))
@@ -465,9 +491,16 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     if not labelled:
         _print("error: no labelled notification to score", err=True)
         return 1
-    cases = evaluate_notifications(
-        labelled, operating_point=args.operating_point, workers=args.workers
-    )
+    if args.scheduler:  # on a Dask cluster (service.batch_dask)
+        from service.batch_dask import evaluate_on_dask
+
+        cases = evaluate_on_dask(
+            labelled, scheduler=args.scheduler, operating_point=args.operating_point
+        )
+    else:
+        cases = evaluate_notifications(
+            labelled, operating_point=args.operating_point, workers=args.workers
+        )
     out = write_evaluation(
         cases, Path(args.out), title=f"Evaluation of {src.name}", weighted=weighted
     )
@@ -585,6 +618,11 @@ def _cmd_baseline(args: argparse.Namespace) -> int:
 
 # --------------------------------------------------------------------- parser
 
+_SCHEDULER_HELP = (
+    "a Dask scheduler address (tcp://host:8786): run on that cluster instead of the local "
+    "process pool (the dask extra; docs/deploy.md)"
+)
+
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
@@ -627,10 +665,13 @@ def build_parser() -> argparse.ArgumentParser:
 
     tri = sub.add_parser("triage", help="triage notifications offline (no server, no database)")
     tri.add_argument("file", nargs="?", help="one notification (JSON)")
-    tri.add_argument("--batch", help="JSON Lines input, one notification per line")
+    tri.add_argument(
+        "--batch", help="JSON Lines input, one notification per line (or Parquet: docs/deploy.md)"
+    )
     tri.add_argument("--out", help="JSON Lines output (with --batch)")
     tri.add_argument("--resume", action="store_true", help="keep OUT's lines and continue")
     tri.add_argument("--workers", type=int, help="processes for --batch (default: the CPU count)")
+    tri.add_argument("--scheduler", help=_SCHEDULER_HELP)
     tri.set_defaults(func=_cmd_triage)
 
     sim = sub.add_parser("simulate", help="run the occupant models of one notification")
@@ -655,6 +696,7 @@ def build_parser() -> argparse.ArgumentParser:
     ev.add_argument("--out", default="evaluation", help="report directory (default ./evaluation)")
     ev.add_argument("--operating-point", help="field model operating point (default: its own)")
     ev.add_argument("--workers", type=int, help="processes (default: the CPU count)")
+    ev.add_argument("--scheduler", help=_SCHEDULER_HELP)
     ev.set_defaults(func=_cmd_evaluate)
 
     cases = sub.add_parser("cases", help="stored cases (operator commands on the database)")

@@ -99,10 +99,21 @@ def log_config(level: str = "INFO") -> dict[str, Any]:
         "handlers": {"default": handler},
         "root": {"handlers": ["default"], "level": level.upper()},
         "loggers": {
-            name: {"handlers": [], "level": level.upper(), "propagate": True}
-            for name in ("uvicorn", "uvicorn.error", "uvicorn.access", "aacn_triage")
+            **{
+                name: {"handlers": [], "level": level.upper(), "propagate": True}
+                for name in ("uvicorn", "uvicorn.error", "uvicorn.access", "aacn_triage")
+            },
+            # Alembic logs a line per plugin and per migration context at INFO on every
+            # start; `service.db.migrate.upgrade` logs one line when it changes the schema.
+            "alembic": {"handlers": [], "level": _quieter(level, "WARNING"), "propagate": True},
         },
     }
+
+
+def _quieter(level: str, floor: str) -> str:
+    """The higher (quieter) of two logging level names."""
+    named = logging.getLevelNamesMapping()
+    return max(level.upper(), floor, key=lambda name: named.get(name, logging.INFO))
 
 
 def configure_logging(level: str = "INFO") -> None:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import logging
 from pathlib import Path
 
 from alembic import command
@@ -14,6 +15,8 @@ from service.db.session import make_engine, normalise_url
 
 __all__ = ["alembic_config", "current_revision", "downgrade", "head_revision", "upgrade"]
 
+logger = logging.getLogger("aacn_triage")
+
 
 def alembic_config(database_url: str) -> Config:
     """An Alembic config pointing at the packaged migrations and `database_url`."""
@@ -24,7 +27,15 @@ def alembic_config(database_url: str) -> Config:
 
 
 def upgrade(database_url: str, revision: str = "head") -> None:
+    """Migrate up to `revision`; logs one line when the schema changed (Alembic's own
+    INFO lines are kept out of the service's log, `service.logs.log_config`)."""
+    before = current_revision(database_url)
     command.upgrade(alembic_config(database_url), revision)
+    after = current_revision(database_url)
+    if after != before:
+        logger.info(
+            "database migrated", extra={"from_revision": before or "base", "to_revision": after}
+        )
 
 
 def downgrade(database_url: str, revision: str) -> None:

@@ -41,6 +41,7 @@ __all__ = [
     "evaluate_notifications",
     "evaluation_markdown",
     "reliability_plot",
+    "score_chunk",
     "write_evaluation",
 ]
 
@@ -80,11 +81,25 @@ class ScoredCase:
 
 
 _WORKER_MODELS: EngineModels | None = None
+#: The operating point `_WORKER_MODELS` were loaded for.
+_WORKER_OPERATING_POINT: str | None = None
 
 
 def _init(operating_point: str | None) -> None:
-    global _WORKER_MODELS
+    global _WORKER_MODELS, _WORKER_OPERATING_POINT
     _WORKER_MODELS = load_engine_models(operating_point=operating_point)
+    _WORKER_OPERATING_POINT = operating_point
+
+
+def score_chunk(
+    items: Sequence[tuple[CrashNotification, bool, float]], *, operating_point: str | None = None
+) -> list[ScoredCase]:
+    """Score labelled notifications in this process, as :func:`evaluate_notifications`
+    does in each of its workers (the models are loaded once per process and operating
+    point); the task of ``aacn-triage evaluate --scheduler`` on a Dask worker."""
+    if _WORKER_MODELS is None or _WORKER_OPERATING_POINT != operating_point:
+        _init(operating_point)
+    return [_score(item) for item in items]
 
 
 def _score(item: tuple[CrashNotification, bool, float]) -> ScoredCase:
