@@ -232,7 +232,7 @@ def _problem_from_validation(exc: ValidationError) -> dict[str, Any]:
     }
 
 
-def _evaluate_text(text: str, models: Any) -> dict[str, Any]:
+def _evaluate_text(text: str, models: Any, *, reproducible: bool = False) -> dict[str, Any]:
     """One notification (JSON text) -> {"result": ...} or {"error": problem}."""
     from service.cases_service import evaluate
     from service.jsonbody import MalformedJson
@@ -246,7 +246,8 @@ def _evaluate_text(text: str, models: Any) -> dict[str, Any]:
     except ValidationError as exc:
         return {"error": _problem_from_validation(exc)}
     try:
-        result = evaluate(notification, models, case_id=None, received_at=datetime.now(UTC))
+        received_at = notification.occurred_at if reproducible else datetime.now(UTC)
+        result = evaluate(notification, models, case_id=None, received_at=received_at)
     except DomainError as exc:
         return {
             "error": {
@@ -256,6 +257,8 @@ def _evaluate_text(text: str, models: Any) -> dict[str, Any]:
                 "errors": [e.model_dump() for e in exc.errors or []],
             }
         }
+    if reproducible:  # nothing of the run itself: the same input gives the same bytes
+        result = result.model_copy(update={"timings_ms": {}})
     return {"result": result.model_dump(mode="json")}
 
 
@@ -275,7 +278,7 @@ def _cmd_triage(args: argparse.Namespace) -> int:
             _print("error: give FILE.json or --batch IN.jsonl --out OUT.jsonl", err=True)
             return 2
         text = Path(args.file).read_text(encoding="utf-8")
-        outcome = _evaluate_text(text, models)
+        outcome = _evaluate_text(text, models, reproducible=args.reproducible)
         if "error" in outcome:
             _print(json.dumps(outcome["error"], indent=2), err=True)
             return 1
@@ -285,7 +288,14 @@ def _cmd_triage(args: argparse.Namespace) -> int:
         _print("error: --batch needs --out OUT.jsonl", err=True)
         return 2
     workers = args.workers or os.cpu_count() or 1
-    return _run_batch(Path(args.batch), Path(args.out), models, resume=args.resume, workers=workers)
+    return _run_batch(
+        Path(args.batch),
+        Path(args.out),
+        models,
+        resume=args.resume,
+        workers=workers,
+        reproducible=args.reproducible,
+    )
 
 
 #: The engine models of a batch worker process (loaded once by `_init_batch_worker`).
@@ -295,24 +305,40 @@ _BATCH_MODELS: Any = None
 BATCH_CHUNK = 8
 
 
-def _init_batch_worker() -> None:
-    global _BATCH_MODELS
+#: Whether the batch of this process is reproducible (`triage --reproducible`).
+_BATCH_REPRODUCIBLE = False
+
+
+def _init_batch_worker(reproducible: bool = False) -> None:
+    global _BATCH_MODELS, _BATCH_REPRODUCIBLE
     from service.context import engine_models_for
 
     _BATCH_MODELS = engine_models_for(_settings())
+    _BATCH_REPRODUCIBLE = reproducible
 
 
 def _batch_line(item: tuple[int, str]) -> str:
-    return _batch_record(*item, _BATCH_MODELS)
+    record = _batch_record_reproducible if _BATCH_REPRODUCIBLE else _batch_record
+    return record(*item, _BATCH_MODELS)
 
 
-def _batch_record(number: int, text: str, models: Any) -> str:
+def _batch_record(number: int, text: str, models: Any, *, reproducible: bool = False) -> str:
     """One output line of a batch: the answer to input line `number`, or its error."""
     if not text.strip():
         record: dict[str, Any] = {"line": number, "error": {"title": "Empty line"}}
     else:
-        record = {"line": number, **_evaluate_text(text, models)}
+        record = {"line": number, **_evaluate_text(text, models, reproducible=reproducible)}
     return json.dumps(record, separators=(",", ":"))
+
+
+def _batch_record_reproducible(number: int, text: str, models: Any) -> str:
+    """:func:`_batch_record` with ``received_at`` the crash's time and no timings.
+
+    Without them an answer holds nothing of the run that made it, so the same
+    input and model versions give the same bytes on any machine, pool or cluster
+    (a recall or a study can be re-run and compared with ``cmp``).
+    """
+    return _batch_record(number, text, models, reproducible=True)
 
 
 def _run_batch_on_dask(args: argparse.Namespace) -> int:
@@ -328,7 +354,7 @@ def _run_batch_on_dask(args: argparse.Namespace) -> int:
             Path(args.out),
             scheduler=args.scheduler,
             settings=_settings(),
-            record=_batch_record,
+            record=_batch_record_reproducible if args.reproducible else _batch_record,
             resume=args.resume,
         )
     except (RuntimeError, ValueError, OSError) as exc:
@@ -342,7 +368,15 @@ def _run_batch_on_dask(args: argparse.Namespace) -> int:
     return 0
 
 
-def _run_batch(src: Path, out: Path, models: Any, *, resume: bool, workers: int = 1) -> int:
+def _run_batch(
+    src: Path,
+    out: Path,
+    models: Any,
+    *,
+    resume: bool,
+    workers: int = 1,
+    reproducible: bool = False,
+) -> int:
     """Evaluate a JSONL file into OUT (one line per input line, in order).
 
     With `workers` > 1 the lines are triaged by a pool of processes (forked from this
@@ -356,7 +390,7 @@ def _run_batch(src: Path, out: Path, models: Any, *, resume: bool, workers: int 
 
     from tqdm import tqdm
 
-    global _BATCH_MODELS
+    global _BATCH_MODELS, _BATCH_REPRODUCIBLE
 
     from service.batch_io import keep_complete_lines, read_texts
 
@@ -370,6 +404,7 @@ def _run_batch(src: Path, out: Path, models: Any, *, resume: bool, workers: int 
         tqdm(total=len(lines), initial=done, unit="case", file=sys.stderr, desc="triage") as bar,
     ):
         _BATCH_MODELS = models
+        _BATCH_REPRODUCIBLE = reproducible
         if workers == 1:
             results: Any = map(_batch_line, todo)
             pool = None
@@ -382,6 +417,7 @@ def _run_batch(src: Path, out: Path, models: Any, *, resume: bool, workers: int 
                 workers,
                 mp_context=multiprocessing.get_context("spawn"),
                 initializer=_init_batch_worker,
+                initargs=(reproducible,),
             )
             results = pool.map(_batch_line, todo, chunksize=BATCH_CHUNK)
         try:
@@ -672,6 +708,12 @@ def build_parser() -> argparse.ArgumentParser:
     tri.add_argument("--resume", action="store_true", help="keep OUT's lines and continue")
     tri.add_argument("--workers", type=int, help="processes for --batch (default: the CPU count)")
     tri.add_argument("--scheduler", help=_SCHEDULER_HELP)
+    tri.add_argument(
+        "--reproducible",
+        action="store_true",
+        help="answers hold nothing of the run: received_at is the crash's occurred_at and "
+        "timings_ms is empty, so the same input gives the same bytes (pool or Dask)",
+    )
     tri.set_defaults(func=_cmd_triage)
 
     sim = sub.add_parser("simulate", help="run the occupant models of one notification")

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import json
 from collections.abc import Iterator
+from datetime import datetime
 from pathlib import Path
 
 import pyarrow as pa
@@ -52,6 +53,10 @@ def _bodies() -> list[str]:
     return [*texts[:5], json.dumps(bad), "", *texts[5:], '{"event_id": 1, "event_id": 2}']
 
 
+def _instant(text: str) -> datetime:
+    return datetime.fromisoformat(text.replace("Z", "+00:00"))
+
+
 def _comparable(out: Path) -> list[str]:
     """The output's lines as bytes, without the per-run fields."""
     lines = []
@@ -77,6 +82,18 @@ def test_triage_batch_on_dask_matches_the_local_pool(scheduler: str, tmp_path: P
     records = [json.loads(x) for x in expected]
     assert [r["line"] for r in records] == list(range(1, len(texts) + 1))
     assert sum("error" in r for r in records) == 3, "invalid, empty, repeated keys"
+
+    # --reproducible: nothing of the run in the answers, so the two are byte-identical
+    local_r, dask_r = tmp_path / "local-r.jsonl", tmp_path / "dask-r.jsonl"
+    argv_r = ["triage", "--batch", str(src), "--reproducible"]
+    assert cli.main([*argv_r, "--out", str(local_r), "--workers", "2"]) == 0
+    assert cli.main([*argv_r, "--out", str(dask_r), "--scheduler", scheduler]) == 0
+    assert dask_r.read_bytes() == local_r.read_bytes()
+    assert [json.loads(x) for x in local_r.read_text().splitlines()] != [], "answers written"
+    first = json.loads(local_r.read_text().splitlines()[0])["result"]
+    assert first["timings_ms"] == {}
+    crash_time = json.loads(texts[0])["occurred_at"]
+    assert _instant(first["received_at"]) == _instant(crash_time)
 
     # the same notifications as Parquet (a `notification` column of JSON text)
     src_pq = tmp_path / "in.parquet"
