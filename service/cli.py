@@ -181,7 +181,8 @@ def _cmd_cases(args: argparse.Namespace) -> int:
         _print(f"error: {exc}", err=True)
         return 2
     settings = _settings()
-    overrides: dict[str, Any] = {"field_artifact": artifact}
+    # a recall may compare against a withdrawn version (that is what recalls are for)
+    overrides: dict[str, Any] = {"field_artifact": artifact, "allow_withdrawn_field_model": True}
     if args.operating_point is not None:
         overrides["operating_point"] = args.operating_point
     try:

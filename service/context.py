@@ -11,6 +11,7 @@ from typing import Any
 from sqlalchemy import Engine
 from sqlalchemy.orm import Session, sessionmaker
 
+from models.field.model import WITHDRAWN_VERSIONS
 from models.triage import EngineModels, load_engine_models
 from service.metrics import Metrics
 from service.settings import Settings
@@ -44,10 +45,12 @@ def limit_blas_threads(threads: int) -> None:
 def engine_models_for(settings: Settings) -> EngineModels:
     """Load the engine models as the settings configure them (raises ValueError).
 
-    Also caps this process's BLAS threads at `settings.blas_threads`.
+    A field model version withdrawn for a defect is refused unless
+    `settings.allow_withdrawn_field_model`. Also caps this process's BLAS threads
+    at `settings.blas_threads`.
     """
     limit_blas_threads(settings.blas_threads)
-    return load_engine_models(
+    models = load_engine_models(
         threshold_override=settings.triage_threshold,
         operating_point=settings.operating_point,
         field_artifact=settings.field_artifact,
@@ -55,6 +58,19 @@ def engine_models_for(settings: Settings) -> EngineModels:
         seat_track_sd_mm=settings.seat_track_sd_mm,
         surrogate_dir=settings.surrogate_dir,
     )
+    field = models.field
+    if (
+        field is not None
+        and field.version in WITHDRAWN_VERSIONS
+        and not settings.allow_withdrawn_field_model
+    ):
+        raise ValueError(
+            f"field model {field.name} {field.version} is withdrawn: "
+            f"{WITHDRAWN_VERSIONS[field.version]}; serve the shipped model (unset "
+            "AACN_FIELD_ARTIFACT), or set AACN_ALLOW_WITHDRAWN_FIELD_MODEL=true only to "
+            "replay past decisions"
+        )
+    return models
 
 
 @dataclass

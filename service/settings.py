@@ -56,6 +56,12 @@ class Settings(BaseSettings):
         description="Field model artifact (JSON); None: the shipped one. An altered or stale "
         "artifact leaves the service not ready.",
     )
+    allow_withdrawn_field_model: bool = Field(
+        default=False,
+        description="Serve a field model version withdrawn for a defect "
+        "(`models.field.model.WITHDRAWN_VERSIONS`; e.g. 1.0.0, which read km/h as mph). Off: "
+        "such an artifact leaves the service not ready. On only to replay past decisions.",
+    )
     posture_sd_deg: float = Field(
         default=DEFAULT_POSTURE_SD_DEG,
         gt=0.0,

@@ -50,6 +50,7 @@ from models.notification import Sex
 
 __all__ = [
     "ARTIFACT_SCHEMA",
+    "WITHDRAWN_VERSIONS",
     "artifact_for_version",
     "artifact_versions",
     "OUTCOME",
@@ -365,6 +366,17 @@ class FieldModel:
 def default_artifact_path() -> Path:
     """The shipped artifact, ``models/field/artifacts/field_mais3.json``."""
     return Path(__file__).resolve().parent / "artifacts" / _ARTIFACT_FILE
+
+
+#: Field model versions withdrawn for a defect, with the defect: never served (the
+#: service is not ready with one), kept byte for byte for recall reports
+#: (``aacn-triage cases rescore``) and forensic replays.
+WITHDRAWN_VERSIONS: Final[Mapping[str, str]] = {
+    "1.0.0": (
+        "fitted on an mph delta-V column read as km/h: it reads every notification at 1.6 "
+        "times its delta-V and over-triages (issue 32; refitted as 2.0.0)"
+    ),
+}
 
 
 def artifact_versions() -> dict[str, Path]:

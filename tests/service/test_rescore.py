@@ -16,7 +16,12 @@ from typing import Any
 import pytest
 from sqlalchemy import select
 
-from models.field.model import artifact_for_version, artifact_versions, load_default
+from models.field.model import (
+    WITHDRAWN_VERSIONS,
+    artifact_for_version,
+    artifact_versions,
+    load_default,
+)
 from models.triage import load_engine_models
 from service import cli
 from service.db.tables import Case, CaseOccupant
@@ -40,7 +45,12 @@ VEDS_DIR = Path(__file__).parent / "veds"
 @pytest.fixture
 def old_api(sqlite_url: str, tmp_path: Path) -> Iterator[ApiClient]:
     """The service as it ran with the retired field model."""
-    yield from _api(sqlite_url, tmp_path, field_artifact=artifact_for_version(RETIRED))
+    yield from _api(
+        sqlite_url,
+        tmp_path,
+        field_artifact=artifact_for_version(RETIRED),
+        allow_withdrawn_field_model=True,
+    )
 
 
 def _snapshot(api: ApiClient) -> list[tuple[Any, ...]]:
@@ -82,6 +92,27 @@ def test_both_versions_are_shipped_and_the_default_is_the_refit() -> None:
     assert load_default().version != RETIRED
     with pytest.raises(LookupError, match="shipped"):
         artifact_for_version("0.0.1")
+
+
+def test_the_withdrawn_version_is_not_served(tmp_path: Path) -> None:
+    """1.0.0 is withdrawn: configured as the field model, the service is not ready and
+    says why (a recall may still load it)."""
+    from fastapi.testclient import TestClient
+
+    from service.app import create_app
+    from service.settings import Settings
+
+    assert RETIRED in WITHDRAWN_VERSIONS
+    settings = Settings(
+        database_url=f"sqlite:///{tmp_path / 'a.db'}",
+        spool_path=tmp_path / "spool.db",
+        field_artifact=artifact_for_version(RETIRED),
+    )
+    with TestClient(create_app(settings)) as client:
+        ready = client.get("/readyz")
+        assert ready.status_code == 503
+        assert "withdrawn" in ready.text
+        assert "mph" in ready.text
 
 
 def test_rescore_lists_the_changed_decisions_and_alters_nothing(old_api: ApiClient) -> None:
