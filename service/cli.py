@@ -22,6 +22,7 @@ Commands::
 from __future__ import annotations
 
 import argparse
+import functools
 import json
 import os
 import shutil
@@ -319,27 +320,22 @@ def _init_batch_worker(reproducible: bool = False) -> None:
 
 
 def _batch_line(item: tuple[int, str]) -> str:
-    record = _batch_record_reproducible if _BATCH_REPRODUCIBLE else _batch_record
-    return record(*item, _BATCH_MODELS)
+    return _batch_record(*item, _BATCH_MODELS, reproducible=_BATCH_REPRODUCIBLE)
 
 
 def _batch_record(number: int, text: str, models: Any, *, reproducible: bool = False) -> str:
-    """One output line of a batch: the answer to input line `number`, or its error."""
+    """One output line of a batch: the answer to input line `number`, or its error.
+
+    With `reproducible`, ``received_at`` is the crash's time and there are no
+    timings: an answer then holds nothing of the run that made it, so the same
+    input and model versions give the same bytes on any machine, pool or cluster
+    (a recall or a study can be re-run and compared with ``cmp``).
+    """
     if not text.strip():
         record: dict[str, Any] = {"line": number, "error": {"title": "Empty line"}}
     else:
         record = {"line": number, **_evaluate_text(text, models, reproducible=reproducible)}
     return json.dumps(record, separators=(",", ":"))
-
-
-def _batch_record_reproducible(number: int, text: str, models: Any) -> str:
-    """:func:`_batch_record` with ``received_at`` the crash's time and no timings.
-
-    Without them an answer holds nothing of the run that made it, so the same
-    input and model versions give the same bytes on any machine, pool or cluster
-    (a recall or a study can be re-run and compared with ``cmp``).
-    """
-    return _batch_record(number, text, models, reproducible=True)
 
 
 def _run_batch_on_dask(args: argparse.Namespace) -> int:
@@ -355,7 +351,7 @@ def _run_batch_on_dask(args: argparse.Namespace) -> int:
             Path(args.out),
             scheduler=args.scheduler,
             settings=_settings(),
-            record=_batch_record_reproducible if args.reproducible else _batch_record,
+            record=functools.partial(_batch_record, reproducible=args.reproducible),
             resume=args.resume,
         )
     except (RuntimeError, ValueError, OSError) as exc:

@@ -23,11 +23,11 @@ from pathlib import Path
 from typing import Any, Final
 
 from pydantic import ValidationError
-from sqlalchemy import select
 from sqlalchemy.orm import Session, sessionmaker
 
 from models.triage import EngineModels
 from service.cases_service import evaluate
+from service.db import repository
 from service.db.tables import Case
 from service.jsonbody import MalformedJson
 from service.problems import DomainError
@@ -121,13 +121,7 @@ def _stored_cases(sessions: sessionmaker[Session]) -> Iterator[Case]:
     after: tuple[datetime, str] | None = None
     while True:
         with sessions() as session:
-            stmt = select(Case).order_by(Case.received_at, Case.id).limit(PAGE_SIZE)
-            if after is not None:
-                at, case_id = after
-                stmt = stmt.where(
-                    (Case.received_at > at) | ((Case.received_at == at) & (Case.id > case_id))
-                )
-            page = list(session.scalars(stmt))
+            page = list(repository.cases_oldest_first(session, limit=PAGE_SIZE, after=after))
             session.expunge_all()
         if not page:
             return

@@ -56,6 +56,22 @@ def summary(
     return body
 
 
+def post_case(api: ApiClient, body: dict[str, Any]) -> dict[str, Any]:
+    """POST a JSON notification as the submitter; the 201 answer."""
+    r = api.client.post("/v1/cases", json=body, headers=api.headers("submitter"))
+    assert r.status_code == 201, r.text
+    result: dict[str, Any] = r.json()
+    return result
+
+
+def stored_case(api: ApiClient, case_id: str) -> dict[str, Any]:
+    """GET a stored case as the auditor."""
+    r = api.client.get(f"/v1/cases/{case_id}", headers=api.headers("auditor"))
+    assert r.status_code == 200, r.text
+    stored: dict[str, Any] = r.json()
+    return stored
+
+
 def assert_problem(response: Any, status: int) -> dict[str, Any]:
     """The response is an RFC 9457 problem with `status`; returns its body."""
     assert response.status_code == status, response.text

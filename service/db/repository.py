@@ -104,6 +104,25 @@ def get_case(session: Session, case_id: str) -> Case | None:
     return session.get(Case, case_id)
 
 
+def cases_oldest_first(
+    session: Session, *, limit: int, after: tuple[datetime, str] | None = None
+) -> Sequence[Case]:
+    """Cases oldest first, keyset-paginated on (received_at, id) (recall reports).
+
+    Parameters
+    ----------
+    after : (received_at, case_id) or None
+        The last row of the previous page.
+    """
+    stmt = select(Case).order_by(Case.received_at, Case.id).limit(limit)
+    if after is not None:
+        at, case_id = after
+        stmt = stmt.where(
+            or_(Case.received_at > at, and_(Case.received_at == at, Case.id > case_id))
+        )
+    return session.scalars(stmt).all()
+
+
 def get_idempotency_record(
     session: Session, client_name: str, event_id: str
 ) -> IdempotencyRecord | None:

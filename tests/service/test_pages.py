@@ -32,23 +32,9 @@ from tests.service.pages_support import (
     set_cookies,
     side_edr,
 )
-from tests.support import ApiClient, assert_problem
+from tests.support import ApiClient, assert_problem, post_case, stored_case
 
 # ---------------------------------------------------------------- helpers
-
-
-def _post(api: ApiClient, body: dict[str, Any]) -> dict[str, Any]:
-    r = api.client.post("/v1/cases", json=body, headers=api.headers("submitter"))
-    assert r.status_code == 201, r.text
-    result: dict[str, Any] = r.json()
-    return result
-
-
-def _stored(api: ApiClient, case_id: str) -> dict[str, Any]:
-    r = api.client.get(f"/v1/cases/{case_id}", headers=api.headers("auditor"))
-    assert r.status_code == 200, r.text
-    stored: dict[str, Any] = r.json()
-    return stored
 
 
 def _page(api: ApiClient, case_id: str, role: str = "auditor") -> Page:
@@ -85,8 +71,8 @@ def _f(element: Any, name: str) -> float:
     ids=lambda f: f.__name__,
 )
 def test_the_page_numbers_are_the_stored_case_numbers(api: ApiClient, make: Any) -> None:
-    case_id = _post(api, make())["case_id"]
-    stored = _stored(api, case_id)
+    case_id = post_case(api, make())["case_id"]
+    stored = stored_case(api, case_id)
     result = stored["result"]
     page = _page(api, case_id)
 
@@ -160,7 +146,7 @@ def test_the_page_numbers_are_the_stored_case_numbers(api: ApiClient, make: Any)
 
 
 def test_the_head_injury_case_marks_the_head_on_the_body_map(api: ApiClient) -> None:
-    result = _post(api, head_injury())
+    result = post_case(api, head_injury())
     head = result["occupants"][0]["region_ais"]["head_neck"]
     assert head >= 2, "the fixture must be a head injury case"
     page = _page(api, result["case_id"])
@@ -184,7 +170,7 @@ def _rewrite(api: ApiClient, case_id: str, edit: Any) -> None:
 
 
 def test_a_case_stored_before_a_model_change_renders_with_its_own_models(api: ApiClient) -> None:
-    case_id = _post(api, head_injury())["case_id"]
+    case_id = post_case(api, head_injury())["case_id"]
     old = {
         name: {"version": f"0.9-old-{name}", "sha256": f"{i:064x}"}
         for i, name in enumerate(["baseline", "field_model", "lpm_code", "triage_code"])
@@ -212,7 +198,7 @@ def test_a_case_stored_before_a_model_change_renders_with_its_own_models(api: Ap
 
 
 def test_assumptions_as_objects_show_their_messages(api: ApiClient) -> None:
-    case_id = _post(api, side_edr())["case_id"]
+    case_id = post_case(api, side_edr())["case_id"]
 
     def edit(result: dict[str, Any], models: dict[str, Any]) -> tuple[dict[str, Any], Any]:
         items = [
@@ -239,7 +225,7 @@ def test_assumptions_as_objects_show_their_messages(api: ApiClient) -> None:
 
 
 def test_an_unauthenticated_visit_gets_the_sign_in_form_and_no_case_data(api: ApiClient) -> None:
-    result = _post(api, head_injury())
+    result = post_case(api, head_injury())
     for path in (f"/v1/cases/{result['case_id']}/report", "/v1/reports"):
         r = api.client.get(path)
         assert r.status_code == 401
@@ -257,7 +243,7 @@ def test_an_unauthenticated_visit_gets_the_sign_in_form_and_no_case_data(api: Ap
 
 
 def test_submitter_keys_cannot_read_the_pages(api: ApiClient) -> None:
-    case_id = _post(api, minor())["case_id"]
+    case_id = post_case(api, minor())["case_id"]
     r = api.client.get(f"/v1/cases/{case_id}/report", headers=api.headers("submitter"))
     assert r.status_code == 403
     assert "auditor or admin" in r.text
@@ -278,7 +264,7 @@ def test_unknown_case_is_a_404_page(api: ApiClient) -> None:
 
 
 def test_sign_in_sets_a_short_lived_strict_session_cookie(api: ApiClient) -> None:
-    case_id = _post(api, head_injury())["case_id"]
+    case_id = post_case(api, head_injury())["case_id"]
     browser = _browser(api)
     target = f"/v1/cases/{case_id}/report"
     r = _sign_in(browser, api.keys["auditor"], target)
@@ -420,7 +406,7 @@ def test_a_configured_secret_signs_sessions_across_processes(tmp_path: Any) -> N
 
 
 def test_pages_send_security_headers_and_load_nothing_from_elsewhere(api: ApiClient) -> None:
-    case_id = _post(api, side_edr())["case_id"]
+    case_id = post_case(api, side_edr())["case_id"]
     responses = [
         api.client.get(f"/v1/cases/{case_id}/report", headers=api.headers("auditor")),
         api.client.get("/v1/reports", headers=api.headers("auditor")),
@@ -456,7 +442,7 @@ def test_pages_send_security_headers_and_load_nothing_from_elsewhere(api: ApiCli
 
 
 def test_the_json_api_and_its_openapi_document_are_unchanged(api: ApiClient) -> None:
-    case_id = _post(api, minor())["case_id"]
+    case_id = post_case(api, minor())["case_id"]
     html = {"Accept": "text/html"}
     r = api.client.get(f"/v1/cases/{case_id}", headers={**api.headers("auditor"), **html})
     assert r.status_code == 200
@@ -472,7 +458,7 @@ def test_the_json_api_and_its_openapi_document_are_unchanged(api: ApiClient) -> 
 
 def test_the_case_list_filters_like_the_api(api: ApiClient) -> None:
     ids = {
-        name: _post(api, make())["case_id"]
+        name: post_case(api, make())["case_id"]
         for name, make in (("head", head_injury), ("minor", minor), ("side", side_edr))
     }
 
@@ -600,7 +586,7 @@ def test_time_since_the_crash_is_in_words() -> None:
 def test_the_largest_pulse_renders_well_under_200_ms(api: ApiClient) -> None:
     """The page of a case with the longest accepted acceleration series (60,000 samples
     a series) renders from the stored documents in far less than the 200 ms budget."""
-    case_id = _post(api, acceleration())["case_id"]
+    case_id = post_case(api, acceleration())["case_id"]
     n = 60_000
     sessions = api.client.app.state.ctx.sessions
     with sessions.begin() as session:

@@ -26,7 +26,7 @@ from service.veds import (
     clock_to_pdof_deg,
     delta_v_to_kmh,
 )
-from tests.support import ApiClient, assert_problem
+from tests.support import ApiClient, assert_problem, post_case, stored_case
 
 DOCS = Path(__file__).parent / "veds"
 VEDS_31 = "http://www.veds.org/acn/3.1"
@@ -48,20 +48,6 @@ def _post_veds(
         content=raw,
         headers={**api.headers(role), "Content-Type": media_type},
     )
-
-
-def _post_json(api: ApiClient, body: dict[str, Any]) -> dict[str, Any]:
-    r = api.client.post("/v1/cases", json=body, headers=api.headers("submitter"))
-    assert r.status_code == 201, r.text
-    result: dict[str, Any] = r.json()
-    return result
-
-
-def _stored(api: ApiClient, case_id: str) -> dict[str, Any]:
-    r = api.client.get(f"/v1/cases/{case_id}", headers=api.headers("auditor"))
-    assert r.status_code == 200, r.text
-    stored: dict[str, Any] = r.json()
-    return stored
 
 
 def _case_count(api: ApiClient) -> int:
@@ -143,7 +129,7 @@ def test_a_veds_document_is_triaged_as_its_json_twin(api: ApiClient, name: str) 
     r = _post_veds(api, _doc(name))
     assert r.status_code == 201, r.text
     veds = r.json()
-    twin = _post_json(api, {"event_id": f"json-twin-{name}", **JSON_TWINS[name]})
+    twin = post_case(api, {"event_id": f"json-twin-{name}", **JSON_TWINS[name]})
     assert _triage_part(veds) == _triage_part(twin)
     # the VEDS answer adds what the mapping assumed, in front of the engine's own
     assert "veds_vehicle_class_assumed" in _codes(veds)
@@ -167,7 +153,7 @@ def test_side_airbags_go_to_the_near_side_driver_as_in_json(api: ApiClient) -> N
         "crash": {**twin["crash"], "pulse": {**twin["crash"]["pulse"], "pdof_deg": 270.0}},
         "occupants": [{**o, "side_airbag": "deployed"} for o in twin["occupants"]],
     }
-    veds, json_answer = r.json(), _post_json(api, body)
+    veds, json_answer = r.json(), post_case(api, body)
     assert _triage_part(veds) == _triage_part(json_answer)
     assert [o["impact_mode"] for o in veds["occupants"]] == ["near_side", "far_side"]
     assert "side_airbag_not_reported" not in _codes(veds)
@@ -213,7 +199,7 @@ def test_the_rfc8148_example_is_triaged_stored_with_its_xml_and_replayed(api: Ap
     assert result["event_id"].startswith("veds-sha256:")
     assert {"veds_crash_time_assumed", "rollover_reported"} <= _codes(result)
     assert result["pulse"]["delta_v_kmh"] == pytest.approx(160.9344)
-    stored = _stored(api, result["case_id"])
+    stored = stored_case(api, result["case_id"])
     assert stored["source_format"] == "veds"
     assert stored["source_document"] == raw.decode("utf-8")
     mapping = stored["source_mapping"]
@@ -248,7 +234,7 @@ def test_the_veds_31_example_is_refused_for_its_front_middle_seat(api: ApiClient
 
 def test_json_cases_say_they_came_in_as_json(api: ApiClient) -> None:
     body = {"event_id": "plain-json", **JSON_TWINS["kph-frontal.xml"]}
-    stored = _stored(api, _post_json(api, body)["case_id"])
+    stored = stored_case(api, post_case(api, body)["case_id"])
     assert stored["source_format"] == "json"
     assert stored["source_document"] is None
     assert stored["source_mapping"] is None
@@ -399,7 +385,7 @@ def test_a_belt_not_reported_is_unbelted_and_said_so(api: ApiClient) -> None:
     assert r.status_code == 201, r.text
     notes = [a for a in r.json()["assumptions"] if a["code"] == "veds_belt_not_reported"]
     assert [a["occupant"] for a in notes] == [0]
-    stored = _stored(api, r.json()["case_id"])
+    stored = stored_case(api, r.json()["case_id"])
     assert stored["notification"]["occupants"][0]["belted"] is False
 
 
@@ -511,7 +497,7 @@ def test_the_veds_10_namespace_is_read_too(api: ApiClient) -> None:
     raw = _doc("kph-frontal.xml").replace(VEDS_31.encode(), b"http://www.veds.org/acn/1.0")
     r = _post_veds(api, raw)
     assert r.status_code == 201, r.text
-    assert _stored(api, r.json()["case_id"])["source_mapping"]["veds_version"] == "1.0"
+    assert stored_case(api, r.json()["case_id"])["source_mapping"]["veds_version"] == "1.0"
 
 
 @pytest.mark.parametrize("media_type", ["application/xml", "text/xml", "text/plain"])
@@ -555,7 +541,7 @@ def test_the_openapi_document_shows_the_xml_request_body(api: ApiClient) -> None
 
 def test_the_case_page_says_the_case_came_in_as_veds(api: ApiClient) -> None:
     veds_id = _post_veds(api, _doc("kph-frontal.xml")).json()["case_id"]
-    json_id = _post_json(api, {"event_id": "page-json", **JSON_TWINS["kph-frontal.xml"]})["case_id"]
+    json_id = post_case(api, {"event_id": "page-json", **JSON_TWINS["kph-frontal.xml"]})["case_id"]
     page = api.client.get(f"/v1/cases/{veds_id}/report", headers=api.headers("auditor"))
     assert page.status_code == 200, page.text
     assert 'data-source-format="veds"' in page.text
@@ -571,7 +557,7 @@ def test_a_veds_case_round_trips_through_postgresql(api_any_db: ApiClient) -> No
     raw = _doc("kph-rollover-two-pulses.xml")
     r = _post_veds(api, raw)
     assert r.status_code == 201, r.text
-    stored = _stored(api, r.json()["case_id"])
+    stored = stored_case(api, r.json()["case_id"])
     assert stored["source_format"] == "veds"
     assert stored["source_document"] == raw.decode("utf-8")
     assert stored["source_mapping"]["vehicle"]["make"] == "Ford"
@@ -582,7 +568,7 @@ def test_a_spooled_veds_case_is_stored_with_its_document(api: ApiClient) -> None
     """The spool keeps the source: the replayer stores the XML and the mapping too."""
     ctx = api.client.app.state.ctx  # type: ignore[attr-defined]
     first = _post_veds(api, _doc("kph-frontal.xml"))
-    stored = _stored(api, first.json()["case_id"])
+    stored = stored_case(api, first.json()["case_id"])
     spool = Spool(Path(api.settings.resolved_spool_path()).with_name("other-spool.db"))
     entry = SpoolEntry(
         seq=None,
@@ -604,7 +590,7 @@ def test_a_spooled_veds_case_is_stored_with_its_document(api: ApiClient) -> None
     (waiting,) = spool.oldest(10)
     assert waiting.source == entry.source
     cases_service.store_spooled(ctx, waiting)
-    again = _stored(api, "00000000-0000-4000-8000-000000000001")
+    again = stored_case(api, "00000000-0000-4000-8000-000000000001")
     assert again["source_format"] == "veds"
     assert again["source_document"] == stored["source_document"]
     assert again["source_mapping"] == stored["source_mapping"]

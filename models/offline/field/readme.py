@@ -17,6 +17,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any, Final
 
+from models.lpm.params import DEFAULT_SET
 from models.notification import (
     AirbagState,
     Body,
@@ -67,10 +68,6 @@ README_EXAMPLE: Final[dict[str, Any]] = {
     ],
 }
 
-#: The vehicle parameter set a notification without `vehicle` gets (the wire
-#: schema's default, as the calibration rows' notifications take it).
-_DEFAULT_VEHICLE_MODEL: Final[str] = "compact_sedan"
-
 _ROWS: Final[tuple[tuple[str, str], ...]] = (
     ("field", "the decision (field model)"),
     ("plain", "plain logistic regression on the telematics fields"),
@@ -105,7 +102,7 @@ def example_notification() -> CrashNotification:
     body = nearest_body(occ["stature_cm"], occ["mass_kg"]) or Body.MALE_50TH
     return CrashNotification(
         event_id=README_EXAMPLE["event_id"],
-        vehicle_model=_DEFAULT_VEHICLE_MODEL,
+        vehicle_model=DEFAULT_SET,  # the wire default vehicle
         drive_side=DriveSide.LEFT,
         pulse=SummaryPulse(
             delta_v_kmh=float(pulse["delta_v_kmh"]), pdof_deg=float(pulse["pdof_deg"])
