@@ -5,10 +5,10 @@ and rewrites the "Dask" section of ``benchmarks/RESULTS.md``.
 
 ``triage --batch`` on N notifications (the documented examples at varied delta-V
 and PDOF), with 1 and then 2 worker processes: the built-in pool (the models
-loaded once in this process, the pool forked from it: ``service.cli._run_batch``)
+loaded once in this process, the pool forked from it: ``service.cli.main._run_batch``)
 against a ``dask.distributed`` `LocalCluster` on loopback (a scheduler and that many
 single-threaded worker processes, the models loaded once per worker by a warm-up
-run before timing; ``service.batch_dask``). Steady throughput: model loading is
+run before timing; ``service.jobs.dask``). Steady throughput: model loading is
 outside both timings. The two engines alternate, R rounds; the median is kept.
 """
 
@@ -37,7 +37,7 @@ WORKERS = (1, 2)
 
 
 def _inputs(n: int) -> list[str]:
-    from service.schemas import EXAMPLE_NOTIFICATIONS
+    from service.cases.notification import EXAMPLE_NOTIFICATIONS
 
     kinds = list(EXAMPLE_NOTIFICATIONS)
     out = []
@@ -61,9 +61,9 @@ def main() -> None:
 
     from distributed import LocalCluster
 
-    from service.batch_dask import triage_batch_on_dask
-    from service.cli import _batch_record, _run_batch
+    from service.cli.main import _batch_record, _run_batch
     from service.context import engine_models_for
+    from service.jobs.dask import triage_batch_on_dask
     from service.settings import get_settings
 
     settings = get_settings()

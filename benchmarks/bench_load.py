@@ -64,7 +64,7 @@ _ENGINE_SCRIPT = """
 import copy, json, sys, time
 from threadpoolctl import threadpool_limits
 from models.triage import load_engine_models, triage
-from service.schemas import EXAMPLE_NOTIFICATIONS, CrashNotificationIn
+from service.cases.notification import EXAMPLE_NOTIFICATIONS, CrashNotificationIn
 repeats = int(sys.argv[1])
 one = copy.deepcopy(EXAMPLE_NOTIFICATIONS["summary"]["value"])
 one["occupants"] = one["occupants"][:1]
@@ -95,7 +95,7 @@ print(json.dumps(out))
 """
 
 #: ``aacn-triage`` of one tree (PYTHONPATH), for the old tree without its console script.
-_CLI = "import sys; from service.cli import main; sys.exit(main(sys.argv[1:]))"
+_CLI = "import sys; from service.cli.main import main; sys.exit(main(sys.argv[1:]))"
 
 
 def _pct(ms: list[float], q: float) -> float:
@@ -210,7 +210,7 @@ def _load(server: _Server, template: dict[str, Any], connections: int, seconds: 
 
 
 def _batch_input(path: Path, n: int) -> None:
-    from service.schemas import EXAMPLE_NOTIFICATIONS
+    from service.cases.notification import EXAMPLE_NOTIFICATIONS
 
     kinds = sorted(EXAMPLE_NOTIFICATIONS)
     lines = []
@@ -313,7 +313,7 @@ def main() -> None:
     parser.add_argument("--no-write", action="store_true", help="print only")
     args = parser.parse_args()
 
-    from service.schemas import EXAMPLE_NOTIFICATIONS
+    from service.cases.notification import EXAMPLE_NOTIFICATIONS
 
     exe = shutil.which("aacn-triage")
     if exe is None:

@@ -7,7 +7,7 @@ Cases: the three documented examples, a five-occupant case with rollover, and th
 largest pulse the contract accepts (60,000 acceleration samples a series, drawn
 after min/max decimation). Two measures per case, median and p99 over N renders:
 
-- render: ``service.report.case_page`` on the stored documents (view model, SVG
+- render: ``service.pages.views.case_page`` on the stored documents (view model, SVG
   geometry, Jinja2), the work of the page itself;
 - request: the server's own time for ``GET /v1/cases/{id}/report`` through the
   ASGI app on a SQLite file (authentication, the read of the stored case and
@@ -43,7 +43,7 @@ def _stats(samples_ms: list[float]) -> tuple[float, float]:
 
 
 def _cases() -> dict[str, dict[str, Any]]:
-    from service.schemas import EXAMPLE_NOTIFICATIONS
+    from service.cases.notification import EXAMPLE_NOTIFICATIONS
 
     cases = {f"example {k}": copy.deepcopy(v["value"]) for k, v in EXAMPLE_NOTIFICATIONS.items()}
     five = copy.deepcopy(EXAMPLE_NOTIFICATIONS["delta_v"]["value"])
@@ -81,9 +81,9 @@ def main() -> None:
 
     from fastapi.testclient import TestClient
 
-    from service import report
     from service.app import create_app
     from service.auth import Role, create_api_key
+    from service.pages import views as report
     from service.settings import Settings
 
     rows = []
@@ -140,7 +140,7 @@ def main() -> None:
         f"{os.cpu_count()} CPUs, Python {platform.python_version()}; load average "
         f"{load[0]:.1f}, {load[1]:.1f}, {load[2]:.1f}: other sessions share the machine). "
         f"Server-side time to draw `GET /v1/cases/{{id}}/report` from the stored case, median "
-        f"and p99 over {args.renders} renders each. *render*: `service.report.case_page` "
+        f"and p99 over {args.renders} renders each. *render*: `service.pages.views.case_page` "
         "(view model, SVG geometry, Jinja2); *server*: the request's own `Server-Timing` "
         "(authentication, one read of the stored case, render), through the ASGI app on "
         "SQLite; *wall*: the in-process request, for scale.",

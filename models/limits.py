@@ -1,7 +1,7 @@
 """The one set of input limits: what the engine accepts, defined once.
 
 The engine checks its inputs against these (``models.pulse``, the field and
-baseline models), and the HTTP contract (``service/schemas.py``) refuses the
+baseline models), and the HTTP contract (``service/cases/notification.py``) refuses the
 same values with a 422 that names the field, so a notification the wire accepts
 is one the engine can process. Each limit names its source.
 """

@@ -22,19 +22,21 @@ from starlette.datastructures import MutableHeaders
 from starlette.responses import Response
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
-from service import __version__, cases_service
-from service.api import cases, health, pages
+from service import __version__, health
 from service.balance import ConnectionBalance, WorkerLoads
+from service.cases import endpoints as cases
+from service.cases import service as cases_service
+from service.cases.notification import EXAMPLE_NOTIFICATIONS, CrashNotificationIn
+from service.cases.veds import EXAMPLE_VEDS, VEDS_MEDIA_TYPE
 from service.context import ServiceContext, engine_models_for
 from service.db import migrate
 from service.db.session import make_engine, make_sessionmaker
+from service.db.spool import Spool, SpoolReplayer
 from service.logs import request_id
 from service.metrics import Metrics, metrics_middleware
+from service.pages import endpoints as pages
 from service.problems import PROBLEM_MEDIA_TYPE, install_problem_handlers, problem_response
-from service.schemas import EXAMPLE_NOTIFICATIONS, CrashNotificationIn
 from service.settings import Settings, get_settings
-from service.spool import Spool, SpoolReplayer
-from service.veds import EXAMPLE_VEDS, VEDS_MEDIA_TYPE
 
 __all__ = ["create_app"]
 
@@ -151,7 +153,7 @@ class ResponseHeaders:
 
 
 #: The pages' stylesheet and icon (package data).
-STATIC_DIR = Path(__file__).resolve().parent / "static"
+STATIC_DIR = Path(__file__).resolve().parent / "pages" / "static"
 
 
 class _StaticFiles(StaticFiles):
@@ -214,7 +216,7 @@ def _document_notification_body(doc: dict[str, Any], schemas: dict[str, Any]) ->
     """Document POST /v1/cases's body, which the route reads itself.
 
     The route parses the body after authentication and refuses duplicate keys
-    (`service.api.cases`), so FastAPI does not see it as a parameter; its schema
+    (`service.cases.endpoints`), so FastAPI does not see it as a parameter; its schema
     and examples are added here, as FastAPI would have.
     """
     post = doc.get("paths", {}).get("/v1/cases", {}).get("post")

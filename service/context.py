@@ -13,9 +13,9 @@ from sqlalchemy.orm import Session, sessionmaker
 
 from models.field.model import WITHDRAWN_VERSIONS
 from models.triage import EngineModels, load_engine_models
+from service.db.spool import Spool
 from service.metrics import Metrics
 from service.settings import Settings
-from service.spool import Spool
 
 log = logging.getLogger("aacn_triage.store")
 
@@ -88,7 +88,7 @@ class ServiceContext:
     models: EngineModels | None
     spool: Spool
     models_error: str | None = None
-    #: Signs the browser session cookies and CSRF tokens (``service.web_auth``).
+    #: Signs the browser session cookies and CSRF tokens (``service.pages.session``).
     session_secret: bytes = b""
 
     #: API keys seen valid: hash -> (caller, monotonic time). Used only while the

@@ -23,7 +23,7 @@ import pytest
 from distributed import LocalCluster
 
 from models.offline.field.rows import CALIBRATION_CSV
-from service import cli
+from service.cli import main as cli
 from tests.support import example, summary
 
 #: Fields of a batch answer that differ between any two runs, local or not.

@@ -9,7 +9,7 @@ from pathlib import Path
 import httpx2 as httpx
 import pytest
 
-from service import cli
+from service.cli import main as cli
 from service.db import migrate
 from service.settings import get_settings
 from tests.support import console_server, example, summary

@@ -20,8 +20,8 @@ from datetime import UTC, datetime
 import pytest
 
 from models.triage import EngineModels, load_engine_models
-from service.cases_service import evaluate
-from service.schemas import EXAMPLE_NOTIFICATIONS, CrashNotificationIn
+from service.cases.notification import EXAMPLE_NOTIFICATIONS, CrashNotificationIn
+from service.cases.service import evaluate
 from tests.paths import ROOT
 
 RECEIVED_AT = datetime(2026, 12, 3, 12, 0, tzinfo=UTC)
@@ -32,8 +32,8 @@ _SCRIPT = """
 import sys
 from datetime import datetime
 from models.triage import load_engine_models
-from service.cases_service import evaluate
-from service.schemas import CrashNotificationIn
+from service.cases.service import evaluate
+from service.cases.notification import CrashNotificationIn
 from tests.paths import ROOT
 
 models = load_engine_models()

@@ -19,7 +19,7 @@ from models.offline.field.rows import (
     row_notification,
 )
 from models.triage import load_engine_models, triage
-from service.cli import main
+from service.cli.main import main
 
 
 def _rows() -> list[CalibrationRow]:

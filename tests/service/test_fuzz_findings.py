@@ -14,9 +14,9 @@ import pytest
 from fastapi.testclient import TestClient
 from sqlalchemy import text
 
-from service import cli
 from service.app import create_app
 from service.auth import Role, create_api_key
+from service.cli import main as cli
 from service.logs import JsonFormatter
 from service.settings import Settings, get_settings
 from tests.support import ApiClient, assert_problem, example, summary

@@ -10,14 +10,14 @@ from fastapi.testclient import TestClient
 from openapi_spec_validator import validate
 
 from service.app import create_app
-from service.schemas import EXAMPLE_NOTIFICATIONS
+from service.cases.notification import EXAMPLE_NOTIFICATIONS
 from service.settings import Settings
 from tests.support import ApiClient, assert_problem, summary
 
 
 def test_the_documented_result_example_is_a_valid_result() -> None:
-    from service.examples import EXAMPLE_CASE_RESULT, EXAMPLE_STORED_CASE
-    from service.schemas import CaseResult, StoredCase
+    from service.cases.examples import EXAMPLE_CASE_RESULT, EXAMPLE_STORED_CASE
+    from service.cases.notification import CaseResult, StoredCase
 
     CaseResult.model_validate(EXAMPLE_CASE_RESULT)
     StoredCase.model_validate(EXAMPLE_STORED_CASE)
@@ -29,9 +29,9 @@ def test_the_result_example_is_the_shipped_engines_answer() -> None:
     from datetime import UTC, datetime
 
     from models.triage import load_engine_models
-    from service.cases_service import evaluate
-    from service.examples import EXAMPLE_CASE_RESULT
-    from service.schemas import CrashNotificationIn
+    from service.cases.examples import EXAMPLE_CASE_RESULT
+    from service.cases.notification import CrashNotificationIn
+    from service.cases.service import evaluate
 
     body = EXAMPLE_NOTIFICATIONS["summary"]["value"]
     notification = CrashNotificationIn.model_validate(body)

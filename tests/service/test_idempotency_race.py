@@ -6,9 +6,9 @@ import threading
 from concurrent.futures import ThreadPoolExecutor
 from datetime import UTC, datetime
 
-from service import cases_service
 from service.auth import Caller, Role
-from service.schemas import CrashNotificationIn
+from service.cases import service as cases_service
+from service.cases.notification import CrashNotificationIn
 from tests.support import ApiClient, summary
 
 

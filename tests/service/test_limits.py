@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from models import limits
-from service.schemas import (
+from service.cases.notification import (
     AccelerationPulseIn,
     CrashNotificationIn,
     DeltaVPulseIn,
@@ -93,7 +93,7 @@ def test_an_engine_failure_is_a_500_with_a_case_reference_and_nothing_stored(
     """Fault injection: the engine raises where no input is to blame. The answer is a
     500-class problem naming a reference (not a 422 about the pulse), and no case is
     stored; the next notification is answered as usual."""
-    import service.cases_service as cases_service
+    import service.cases.service as cases_service
 
     def broken(*_: object, **__: object) -> object:
         raise RuntimeError("injected engine fault")

@@ -15,12 +15,12 @@ from fastapi.testclient import TestClient
 
 from models.injury import criteria, risk
 from models.notification import Body
-from service import report
 from service.db import repository
 from service.db.tables import ApiKey, Case
-from service.drawing import car_diagram, pulse_plot
+from service.pages import views as report
+from service.pages.drawing import car_diagram, pulse_plot
+from service.pages.session import SESSION_COOKIE, issue_session
 from service.settings import Settings
-from service.web_auth import SESSION_COOKIE, issue_session
 from tests.service.pages_support import (
     Page,
     acceleration,

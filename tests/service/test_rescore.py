@@ -23,11 +23,11 @@ from models.field.model import (
     load_default,
 )
 from models.triage import load_engine_models
-from service import cli
+from service.cases.veds import VEDS_MEDIA_TYPE
+from service.cli import main as cli
 from service.db.tables import Case, CaseOccupant
-from service.rescore import CSV_COLUMNS, rescore
+from service.jobs.rescore import CSV_COLUMNS, rescore
 from service.settings import get_settings
-from service.veds import VEDS_MEDIA_TYPE
 from tests.conftest import _api
 from tests.support import ApiClient, summary
 

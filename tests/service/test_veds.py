@@ -16,9 +16,8 @@ from typing import Any
 
 import pytest
 
-from service import cases_service
-from service.spool import Spool, SpoolEntry
-from service.veds import (
+from service.cases import service as cases_service
+from service.cases.veds import (
     KM_PER_MILE,
     MAX_DEPTH,
     MAX_ELEMENTS,
@@ -26,6 +25,7 @@ from service.veds import (
     clock_to_pdof_deg,
     delta_v_to_kmh,
 )
+from service.db.spool import Spool, SpoolEntry
 from tests.support import ApiClient, assert_problem, post_case, stored_case
 
 DOCS = Path(__file__).parent / "veds"

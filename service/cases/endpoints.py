@@ -12,18 +12,9 @@ from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
 from pydantic import ValidationError
 
-from service import cases_service
-from service.api.deps import ContextDep
 from service.auth import require_auditor, require_submitter
-from service.db.repository import CaseFilters
-from service.jsonbody import MalformedJson
-from service.problems import (
-    PROBLEM_MEDIA_TYPE,
-    MalformedBody,
-    Problem,
-    UnsupportedMediaType,
-)
-from service.schemas import (
+from service.cases import service as cases_service
+from service.cases.notification import (
     CaseList,
     CaseResult,
     CrashNotificationIn,
@@ -31,7 +22,16 @@ from service.schemas import (
     Rfc3339Text,
     StoredCase,
 )
-from service.veds import VEDS_MEDIA_TYPE, is_veds_media_type, read_veds
+from service.cases.veds import VEDS_MEDIA_TYPE, is_veds_media_type, read_veds
+from service.db.repository import CaseFilters
+from service.deps import ContextDep
+from service.jsonbody import MalformedJson
+from service.problems import (
+    PROBLEM_MEDIA_TYPE,
+    MalformedBody,
+    Problem,
+    UnsupportedMediaType,
+)
 
 __all__ = ["router"]
 

@@ -25,9 +25,18 @@ from models.assumptions import Assumption
 from models.pulse import PulseError
 from models.triage import EngineModels, Method, UnknownVehicleModel, triage
 from service.auth import Caller
+from service.cases.notification import (
+    CaseList,
+    CaseResult,
+    CaseSummary,
+    CrashNotificationIn,
+    ReceivedSource,
+    StoredCase,
+)
+from service.cases.result import to_case_result
 from service.context import ServiceContext
-from service.conversion import to_case_result
 from service.db import repository
+from service.db.spool import SpoolEntry, SpoolError
 from service.db.tables import Case, CaseOccupant, IdempotencyRecord
 from service.problems import (
     EngineFailure,
@@ -37,15 +46,6 @@ from service.problems import (
     StoreUnavailable,
     UnprocessableNotification,
 )
-from service.schemas import (
-    CaseList,
-    CaseResult,
-    CaseSummary,
-    CrashNotificationIn,
-    ReceivedSource,
-    StoredCase,
-)
-from service.spool import SpoolEntry, SpoolError
 
 log = logging.getLogger("aacn_triage")
 

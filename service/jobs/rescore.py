@@ -26,12 +26,12 @@ from pydantic import ValidationError
 from sqlalchemy.orm import Session, sessionmaker
 
 from models.triage import EngineModels
-from service.cases_service import evaluate
+from service.cases.notification import CaseResult, CrashNotificationIn
+from service.cases.service import evaluate
 from service.db import repository
 from service.db.tables import Case
 from service.jsonbody import MalformedJson
 from service.problems import DomainError
-from service.schemas import CaseResult, CrashNotificationIn
 
 __all__ = ["RescoreReport", "RescoreRow", "rescore", "write_csv"]
 

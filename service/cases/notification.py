@@ -33,7 +33,7 @@ from models.field.features import FieldMode
 from models.impact_mode import ImpactMode
 from models.pulse import haversine, haversine_amplitude_g
 from models.triage import IntervalMethod, Method
-from service.examples import EXAMPLE_CASE_LIST, EXAMPLE_CASE_RESULT, EXAMPLE_STORED_CASE
+from service.cases.examples import EXAMPLE_CASE_LIST, EXAMPLE_CASE_RESULT, EXAMPLE_STORED_CASE
 from service.jsonbody import loads_strict
 
 __all__ = [

@@ -5,7 +5,7 @@
 - ``GET /v1/session``: the sign-in form; ``POST /v1/session``: sign in with an API
   key (sets the session cookie); ``POST /v1/session/logout``: sign out.
 
-The pages accept a session cookie (``service.web_auth``) or, like the API, an
+The pages accept a session cookie (``service.pages.session``) or, like the API, an
 ``Authorization: Bearer`` key. They are HTML resources, kept out of the OpenAPI
 document; the JSON API is unchanged. An unauthenticated visit gets 401 with the
 sign-in form and no case data.
@@ -23,14 +23,14 @@ from fastapi import APIRouter, Request
 from fastapi.concurrency import run_in_threadpool
 from fastapi.responses import HTMLResponse, RedirectResponse, Response
 
-from service import cases_service, report
-from service.api.cases import ImpactModeFilter
-from service.api.deps import ContextDep
 from service.auth import Caller, Role, caller_for_key, caller_for_key_id
+from service.cases import service as cases_service
+from service.cases.endpoints import ImpactModeFilter
 from service.context import ServiceContext
 from service.db.repository import CaseFilters
-from service.problems import UnprocessableNotification
-from service.web_auth import (
+from service.deps import ContextDep
+from service.pages import views as report
+from service.pages.session import (
     COOKIE_PATH,
     LOGIN_CSRF_COOKIE,
     SESSION_COOKIE,
@@ -45,6 +45,7 @@ from service.web_auth import (
     set_login_csrf_cookie,
     set_session_cookie,
 )
+from service.problems import UnprocessableNotification
 
 __all__ = ["CONTENT_SECURITY_POLICY", "router"]
 

@@ -4,10 +4,10 @@ An NG911 call center receives a vehicle's crash data as the Vehicle Emergency
 Data Set, ``application/EmergencyCallData.VEDS+xml`` (VEDS 3.1, namespace
 ``http://www.veds.org/acn/3.1``; the 1.0 namespace is read the same way). This
 module reads such a document and maps it to the service's own wire model
-(:class:`~service.schemas.CrashNotificationIn`), so that triage, idempotency and
+(:class:`~service.cases.notification.CrashNotificationIn`), so that triage, idempotency and
 storage are those of a JSON notification. What the mapping took from where, what
 it assumed (assumption codes) and what it left unused is recorded with the case
-(:class:`~service.schemas.ReceivedSource`).
+(:class:`~service.cases.notification.ReceivedSource`).
 
 Reading is hardened (``defusedxml`` over the standard library's expat): a
 document type declaration is refused outright, so there are no entities,
@@ -56,8 +56,8 @@ from pydantic import ValidationError
 from models import limits, units
 from models.assumptions import Assumption, AssumptionCode
 from models.notification import AirbagState, Seat
+from service.cases.notification import CrashNotificationIn, ReceivedSource
 from service.problems import FieldError, MalformedXml, UnprocessableNotification
-from service.schemas import CrashNotificationIn, ReceivedSource
 
 __all__ = [
     "EXAMPLE_VEDS",

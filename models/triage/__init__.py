@@ -142,7 +142,7 @@ BASELINE_OUTCOME = "police_A+K"
 #: model inputs and how the answers become a decision. Their checksum is recorded
 #: with every case (``triage_code``), beside those of the models they call.
 TRIAGE_SOURCES = (
-    "triage.py",
+    "triage/__init__.py",
     "pulse.py",
     "impact_mode.py",
     "notification.py",

@@ -174,7 +174,7 @@ def _cmd_cases(args: argparse.Namespace) -> int:
 
     from models.field.model import artifact_for_version
     from service.context import engine_models_for
-    from service.rescore import rescore, write_csv
+    from service.jobs.rescore import rescore, write_csv
 
     try:
         artifact = artifact_for_version(args.model)
@@ -236,10 +236,10 @@ def _problem_from_validation(exc: ValidationError) -> dict[str, Any]:
 
 def _evaluate_text(text: str, models: Any, *, reproducible: bool = False) -> dict[str, Any]:
     """One notification (JSON text) -> {"result": ...} or {"error": problem}."""
-    from service.cases_service import evaluate
+    from service.cases.notification import CrashNotificationIn
+    from service.cases.service import evaluate
     from service.jsonbody import MalformedJson
     from service.problems import DomainError
-    from service.schemas import CrashNotificationIn
 
     try:
         notification, _ = CrashNotificationIn.from_json(text)
@@ -267,7 +267,7 @@ def _evaluate_text(text: str, models: Any, *, reproducible: bool = False) -> dic
 def _cmd_triage(args: argparse.Namespace) -> int:
     from service.context import engine_models_for
 
-    if args.batch is not None and args.scheduler:  # on a Dask cluster (service.batch_dask)
+    if args.batch is not None and args.scheduler:  # on a Dask cluster (service.jobs.dask)
         return _run_batch_on_dask(args)
 
     try:
@@ -339,12 +339,12 @@ def _batch_record(number: int, text: str, models: Any, *, reproducible: bool = F
 
 
 def _run_batch_on_dask(args: argparse.Namespace) -> int:
-    """`triage --batch` on the Dask cluster at ``--scheduler`` (service.batch_dask)."""
+    """`triage --batch` on the Dask cluster at ``--scheduler`` (service.jobs.dask)."""
     if args.out is None:
         _print("error: --batch needs --out OUT.jsonl", err=True)
         return 2
     try:
-        from service.batch_dask import triage_batch_on_dask
+        from service.jobs.dask import triage_batch_on_dask
 
         evaluated, refused = triage_batch_on_dask(
             Path(args.batch),
@@ -389,9 +389,9 @@ def _run_batch(
 
     global _BATCH_MODELS, _BATCH_REPRODUCIBLE
 
-    from service.batch_io import keep_complete_lines, read_texts
+    from service.jobs.io import keep_complete_lines, read_texts
 
-    lines = read_texts(src)  # JSON Lines or Parquet (service.batch_io)
+    lines = read_texts(src)  # JSON Lines or Parquet (service.jobs.io)
     done = keep_complete_lines(out, resume=resume)
     failures = 0
     todo = list(enumerate(lines[done:], start=done + 1))
@@ -446,7 +446,7 @@ def _labelled_jsonl(
     """
     import csv
 
-    from service.schemas import CrashNotificationIn
+    from service.cases.notification import CrashNotificationIn
 
     table: dict[str, dict[str, Any]] = {}
     if labels is not None:
@@ -524,8 +524,8 @@ def _cmd_evaluate(args: argparse.Namespace) -> int:
     if not labelled:
         _print("error: no labelled notification to score", err=True)
         return 1
-    if args.scheduler:  # on a Dask cluster (service.batch_dask)
-        from service.batch_dask import evaluate_on_dask
+    if args.scheduler:  # on a Dask cluster (service.jobs.dask)
+        from service.jobs.dask import evaluate_on_dask
 
         cases = evaluate_on_dask(
             labelled, scheduler=args.scheduler, operating_point=args.operating_point
@@ -547,7 +547,7 @@ def _cmd_simulate(args: argparse.Namespace) -> int:
 
     from models.offline.lpm.plot import plot_simulation
     from models.triage import UnknownVehicleModel, load_engine_models, simulate_notification
-    from service.schemas import CrashNotificationIn
+    from service.cases.notification import CrashNotificationIn
 
     _settings()
     try:

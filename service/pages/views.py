@@ -7,8 +7,8 @@ versions it was decided with. The stored documents are read as plain JSON, not
 through today's wire models, so an older stored shape still renders (for
 instance `assumptions` as strings, or as objects with a `message`).
 
-Templates: ``service/templates/`` (Jinja2, autoescaped); stylesheet
-``service/static/report.css``; drawings: :mod:`service.drawing`.
+Templates: ``service/pages/templates/`` (Jinja2, autoescaped); stylesheet
+``service/pages/static/report.css``; drawings: :mod:`service.pages.drawing`.
 """
 
 from __future__ import annotations
@@ -39,7 +39,7 @@ from models.injury.risk import (
 )
 from models.notification import Body
 from service.db import repository
-from service.drawing import (
+from service.pages.drawing import (
     BODY_REGIONS,
     Bar,
     CarDiagram,
@@ -74,7 +74,7 @@ _ENV = Environment(
 
 
 def render(template: str, **context: Any) -> str:
-    """Render one template of ``service/templates/``."""
+    """Render one template of ``service/pages/templates/``."""
     return _ENV.get_template(template).render(**context)
 
 

@@ -24,7 +24,7 @@ from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from service.batch_io import count_items, iter_chunks, keep_complete_lines
+from service.jobs.io import count_items, iter_chunks, keep_complete_lines
 
 if TYPE_CHECKING:
     from models.notification import CrashNotification
@@ -115,7 +115,7 @@ def triage_batch_on_dask(
     Parameters
     ----------
     src, out : Path
-        Input (`service.batch_io`) and JSON Lines output, one line per input line in
+        Input (`service.jobs.io`) and JSON Lines output, one line per input line in
         input order.
     scheduler : str
         The scheduler's address, e.g. ``tcp://10.0.0.5:8786``.

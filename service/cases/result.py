@@ -7,7 +7,7 @@ from datetime import datetime
 
 from models.assumptions import Assumption
 from models.triage import OccupantTriage, TriageDecision, TriageResult
-from service.schemas import (
+from service.cases.notification import (
     AssumptionOut,
     CaseResult,
     HaversineOut,

@@ -9,12 +9,12 @@ from fastapi import APIRouter
 from fastapi.responses import JSONResponse, Response
 from prometheus_client import CONTENT_TYPE_LATEST, generate_latest
 
-from service.api.deps import ContextDep
 from service.auth import metrics_access
 from service.context import ServiceContext
 from service.db import repository
+from service.db.spool import SpoolError
+from service.deps import ContextDep
 from service.problems import problem_response
-from service.spool import SpoolError
 
 __all__ = ["router"]
 

@@ -1,0 +1,1 @@
+"""The ``aacn-triage`` command line (:mod:`service.cli.main`)."""
