@@ -320,3 +320,20 @@ def test_every_case_records_the_code_that_turned_it_into_an_answer(models: Engin
     rear_seat = dataclasses.replace(_notification().occupants[0], seat=Seat.REAR_LEFT)
     baseline_only = triage(_notification(occupants=(rear_seat,)), models)
     assert set(baseline_only.models) == {"baseline", "field_model", "triage_code"}
+
+
+def test_the_triage_code_checksum_covers_the_whole_package() -> None:
+    """Every module of models/triage/ that decides an answer is in TRIAGE_SOURCES: a
+    module added to the package cannot escape the checksum cases record."""
+    from pathlib import Path
+
+    import models as engine_package
+    from models.triage import TRIAGE_SOURCES
+
+    root = Path(engine_package.__file__).resolve().parent
+    modules = {f"triage/{p.name}" for p in (root / "triage").glob("*.py")}
+    off_the_answer = {"triage/__init__.py", "triage/simulation.py"}
+    assert modules - off_the_answer == {s for s in TRIAGE_SOURCES if s.startswith("triage/")}
+    assert len(set(TRIAGE_SOURCES)) == len(TRIAGE_SOURCES)
+    for rel in TRIAGE_SOURCES:
+        assert (root / rel).is_file(), rel

@@ -1,0 +1,176 @@
+"""The field evidence: what the field risk model (`models.field`) is given per
+occupant, built as a request builds it (also used by the offline fits)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from models.assumptions import Assumption, AssumptionCode
+from models.field.features import FieldInputs, field_inputs
+from models.field.model import FieldModel, FieldPrediction
+from models.impact_mode import ImpactClassification, classify_impact
+from models.notification import (
+    CrashNotification,
+    Occupant,
+)
+from models.pulse import ProcessedPulse, process_pulse
+from models.triage.decision import _baseline_decision
+from models.triage.loading import EngineModels
+from models.triage.occupant_model import _lpm_occupant, _LpmAnswer
+from models.triage.result import TriageDecision, UnknownVehicleModel
+
+__all__ = ["OccupantEvidence", "notification_field_inputs", "occupant_evidence"]
+
+
+def _field_assumptions(
+    index: int, occupant: Occupant, prediction: FieldPrediction, field_model: FieldModel
+) -> list[Assumption]:
+    out = []
+    imp = field_model.imputation
+    if "age_years" in prediction.imputed:
+        out.append(
+            Assumption(
+                AssumptionCode.AGE_IMPUTED,
+                f"occupants[{index}]: age unknown: the field model uses the calibration "
+                f"median, {imp.age_years:g} years",
+                index,
+            )
+        )
+    if "bmi" in prediction.imputed:
+        out.append(
+            Assumption(
+                AssumptionCode.BMI_IMPUTED,
+                f"occupants[{index}]: stature or mass unknown: the field model uses the "
+                f"calibration median body mass index, {imp.bmi:.1f} kg/m2",
+                index,
+            )
+        )
+    if prediction.extrapolated:
+        out.append(
+            Assumption(
+                AssumptionCode.DELTA_V_EXTRAPOLATED,
+                f"occupants[{index}]: delta-V above the field model's calibration data "
+                f"(largest {field_model.delta_v_max_kmh:.0f} km/h): its probability is "
+                "extrapolated",
+                index,
+            )
+        )
+    if not occupant.seat.front_row:
+        out.append(
+            Assumption(
+                AssumptionCode.SECOND_ROW_SEAT,
+                f"occupants[{index}]: {occupant.seat.value} seat: the field model decides (its "
+                "data have no seat column); the occupant models are of the front row",
+                index,
+            )
+        )
+    return out
+
+
+@dataclass(frozen=True)
+class OccupantEvidence:
+    """What the engine knows of one occupant before the field model decides.
+
+    Attributes
+    ----------
+    index : int
+    impact : ImpactClassification
+    field_inputs : FieldInputs
+        The field model's inputs.
+    baseline : TriageDecision
+        The statistical baseline's decision.
+    occupant_model : _LpmAnswer or None
+        The occupant model's answer (None out of coverage or when it failed).
+    """
+
+    index: int
+    impact: ImpactClassification
+    field_inputs: FieldInputs
+    baseline: TriageDecision
+    occupant_model: _LpmAnswer | None
+
+
+def _occupant_evidence(
+    index: int,
+    occupant: Occupant,
+    notification: CrashNotification,
+    pulse: ProcessedPulse,
+    models: EngineModels,
+    assumptions: list[Assumption],
+) -> OccupantEvidence:
+    impact = classify_impact(pulse.pdof_deg, occupant.seat, notification.drive_side)
+    answer: _LpmAnswer | None = None
+    if impact.in_lpm_coverage:
+        params = models.parameter_sets[notification.vehicle_model]
+        answer = _lpm_occupant(index, occupant, impact, pulse, params, models, assumptions)
+    elif occupant.seat.front_row:
+        assumptions.append(
+            Assumption(
+                AssumptionCode.OUTSIDE_OCCUPANT_MODEL_COVERAGE,
+                f"occupants[{index}]: PDOF {impact.pdof_deg:.0f} deg is outside every occupant "
+                "model's coverage; the field model decides without an occupant-model explanation",
+                index,
+            )
+        )
+    return OccupantEvidence(
+        index=index,
+        impact=impact,
+        field_inputs=_field_inputs(occupant, notification, pulse, impact),
+        baseline=_baseline_decision(models, occupant, pulse, impact),
+        occupant_model=answer,
+    )
+
+
+def _field_inputs(
+    occupant: Occupant,
+    notification: CrashNotification,
+    pulse: ProcessedPulse,
+    impact: ImpactClassification,
+) -> FieldInputs:
+    """The field model's inputs of one occupant (a request and the offline fit alike)."""
+    return field_inputs(
+        occupant,
+        pulse.delta_v_kmh,
+        impact.mode,
+        multiple_impacts=notification.multiple_impacts,
+        rollover=notification.rollover,
+    )
+
+
+def notification_field_inputs(notification: CrashNotification) -> list[FieldInputs]:
+    """The field model's inputs for every occupant, as :func:`triage` builds them.
+
+    The pulse is processed and each occupant's impact classified exactly as in a
+    request; no occupant model runs (the offline fit and its tests use this).
+    """
+    pulse = process_pulse(notification.pulse)
+    out = []
+    for occupant in notification.occupants:
+        impact = classify_impact(pulse.pdof_deg, occupant.seat, notification.drive_side)
+        out.append(_field_inputs(occupant, notification, pulse, impact))
+    return out
+
+
+def occupant_evidence(
+    notification: CrashNotification, models: EngineModels
+) -> tuple[list[OccupantEvidence], list[Assumption]]:
+    """Every occupant's evidence without a decision (offline fits and checks).
+
+    Needs no field model: the offline fit uses it to compute the field model's
+    inputs exactly as :func:`triage` does, and the occupant models' answers.
+
+    Returns
+    -------
+    evidence : list of OccupantEvidence
+        One per occupant, in order.
+    assumptions : list of str
+    """
+    if notification.vehicle_model not in models.vehicle_models:
+        raise UnknownVehicleModel(f"unknown vehicle model {notification.vehicle_model!r}")
+    pulse = process_pulse(notification.pulse)
+    assumptions: list[Assumption] = []
+    out = [
+        _occupant_evidence(i, o, notification, pulse, models, assumptions)
+        for i, o in enumerate(notification.occupants)
+    ]
+    return out, assumptions

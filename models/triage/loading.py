@@ -1,0 +1,243 @@
+"""Loading: every model the engine answers with, verified and warmed once at start,
+and the checksum of the orchestration code itself (``triage_code``)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
+
+from models import ENGINE_VERSION
+from models.baseline.logistic import BaselineModel, load_default
+from models.constants import DEFAULT_POSTURE_SD_DEG, DEFAULT_SEAT_TRACK_SD_MM
+from models.field.model import FieldModel
+from models.field.model import load_default as load_field_model
+from models.injury.batch_compiled import warm_up as _warm_up_p_iss
+from models.lpm.fingerprint import lpm_code_sha256, sources_sha256
+from models.lpm.params import ParameterSet, available_parameter_sets, load_parameter_set
+from models.lpm.simulate import warm_up as _warm_up_lpm
+from models.pulse import warm_up as _warm_up_pulse
+from models.risk_calibration import (
+    CALIBRATION_NAME,
+    CALIBRATION_VERSION,
+    calibration_sha256,
+)
+from models.surrogate.evaluate import (
+    EVALUATION_NAME,
+    EVALUATION_VERSION,
+    SurrogateLibrary,
+    default_artifact_dir,
+    evaluation_sha256,
+)
+from models.surrogate.kernels import warm_up as _warm_up_surrogates
+from models.triage.result import ModelInfo
+
+__all__ = [
+    "TRIAGE_SOURCES",
+    "triage_code_sha256",
+    "EngineModels",
+    "load_surrogates",
+    "warm_up",
+    "load_engine_models",
+]
+
+
+#: Sources (under models/) of the orchestration itself: how a notification becomes
+#: model inputs and how the answers become a decision. Their checksum is recorded
+#: with every case (``triage_code``), beside those of the models they call. The
+#: package ``models/triage/`` counts whole: every module of it but its face
+#: (``__init__``, re-exports only) and ``simulation.py`` (not on the answer's path),
+#: in this fixed order (tests/models/test_triage.py checks that none is left out).
+#: Since the package was split from one ``triage.py`` (issue 37) the checksum differs
+#: from the one cases stored before the split record: those keep theirs (a record of
+#: the code that answered them), the code's behaviour is unchanged.
+TRIAGE_SOURCES = (
+    "triage/result.py",
+    "triage/loading.py",
+    "triage/decision.py",
+    "triage/occupant_model.py",
+    "triage/field_evidence.py",
+    "triage/run.py",
+    "pulse.py",
+    "impact_mode.py",
+    "notification.py",
+    "sensor_evidence.py",
+    "lpm/domain.py",
+)
+
+
+@lru_cache(maxsize=1)
+def triage_code_sha256() -> str:
+    """SHA-256 over :data:`TRIAGE_SOURCES` (as :func:`models.lpm.fingerprint.sources_sha256`)."""
+    return sources_sha256(TRIAGE_SOURCES)
+
+
+@dataclass(frozen=True)
+class EngineModels:
+    """Every model the engine answers with, loaded once at start.
+
+    Attributes
+    ----------
+    baseline : BaselineModel
+        The statistical baseline (always present).
+    parameter_sets : Mapping[str, ParameterSet]
+        Occupant-model parameter sets by vehicle model name.
+    surrogates : SurrogateLibrary or None
+        PCE surrogates for the confidence intervals; None: the interim interval
+        from direct occupant-model runs over the sensor-uncertainty box.
+    field : FieldModel or None
+        The field risk model the decision is made with; None only for offline
+        tools that compute the occupant models' answers alone
+        (:func:`occupant_model_answers`): :func:`triage` needs it.
+    operating_point : str or None
+        Named operating point of the field model (None: the artifact's default).
+    threshold_override : float or None
+        Replaces the operating point's thresholds when set.
+    posture_sd_deg, seat_track_sd_mm : float
+        Sensor standard deviations used when a notification gives none.
+    """
+
+    baseline: BaselineModel
+    parameter_sets: Mapping[str, ParameterSet]
+    surrogates: SurrogateLibrary | None = None
+    field: FieldModel | None = None
+    operating_point: str | None = None
+    threshold_override: float | None = None
+    posture_sd_deg: float = DEFAULT_POSTURE_SD_DEG
+    seat_track_sd_mm: float = DEFAULT_SEAT_TRACK_SD_MM
+
+    @property
+    def vehicle_models(self) -> frozenset[str]:
+        """Vehicle parameter-set names a notification may name."""
+        return frozenset(self.parameter_sets)
+
+    def model_infos(self, vehicle_model: str | None = None) -> dict[str, ModelInfo]:
+        """Versions and checksums: the baseline, and the occupant models of `vehicle_model`.
+
+        With `vehicle_model` None, every loaded model.
+        """
+        b = self.baseline
+        infos = {"baseline": ModelInfo(name=b.name, version=b.version, sha256=b.sha256)}
+        if self.field is not None:
+            f = self.field
+            infos["field_model"] = ModelInfo(name=f.name, version=f.version, sha256=f.sha256)
+        names = sorted(self.parameter_sets) if vehicle_model is None else [vehicle_model]
+        for name in names:
+            ps = self.parameter_sets[name]
+            infos[f"lpm_parameters:{name}"] = ModelInfo(
+                name=ps.name, version=name, sha256=ps.sha256
+            )
+        infos["lpm_code"] = ModelInfo(
+            name="occupant LPMs and injury criteria",
+            version=ENGINE_VERSION,
+            sha256=lpm_code_sha256(),
+        )
+        infos["triage_code"] = _triage_code_info()
+        infos["risk_calibration"] = ModelInfo(
+            name=CALIBRATION_NAME, version=CALIBRATION_VERSION, sha256=calibration_sha256()
+        )
+        if self.surrogates is not None:
+            infos["surrogates"] = ModelInfo(
+                name="pce_surrogates",
+                version=self.surrogates.version,
+                sha256=self.surrogates.sha256,
+            )
+            infos["surrogate_evaluation"] = ModelInfo(
+                name=EVALUATION_NAME, version=EVALUATION_VERSION, sha256=evaluation_sha256()
+            )
+        return infos
+
+
+def load_surrogates(directory: Path | None = None) -> SurrogateLibrary | None:
+    """Load and verify the PCE surrogates; None when none are shipped.
+
+    Raises
+    ------
+    ValueError
+        When artifacts are present but fail verification (checksum mismatch, a
+        file missing) or were built from other occupant-model code or parameters.
+    """
+    root = default_artifact_dir() if directory is None else directory
+    if not (root / "manifest.json").is_file() and not any(root.glob("*.npz")):
+        return None
+    library = SurrogateLibrary.load(root)
+    reason = library.stale_reason()
+    if reason is not None:
+        raise ValueError(f"surrogates are stale: {reason}; run `aacn-triage build-surrogates`")
+    return library
+
+
+def warm_up() -> None:
+    """Compile (or load from the numba cache) every compiled loop of the request path:
+    the pulse fit, the LPM kernels and measures, the surrogates' loops and their
+    P(ISS >= 15)."""
+    _warm_up_pulse()
+    _warm_up_lpm()
+    _warm_up_surrogates()
+    _warm_up_p_iss()
+
+
+def load_engine_models(
+    threshold_override: float | None = None,
+    *,
+    operating_point: str | None = None,
+    field_artifact: Path | None = None,
+    posture_sd_deg: float = DEFAULT_POSTURE_SD_DEG,
+    seat_track_sd_mm: float = DEFAULT_SEAT_TRACK_SD_MM,
+    surrogate_dir: Path | None = None,
+    use_surrogates: bool = True,
+    use_field: bool = True,
+    warm: bool = True,
+) -> EngineModels:
+    """Load and verify the shipped model artifacts, and warm the compiled kernels.
+
+    Raises
+    ------
+    ValueError
+        When an artifact is missing, malformed, altered, or does not match the
+        code, or `operating_point` is not one the field model defines.
+    """
+    field_model: FieldModel | None = None
+    if use_field:
+        field_model = (
+            load_field_model()
+            if field_artifact is None
+            else FieldModel.from_artifact(field_artifact)
+        )
+    if (
+        field_model is not None
+        and operating_point is not None
+        and operating_point not in field_model.operating_points
+    ):
+        raise ValueError(
+            f"unknown operating point {operating_point!r}; the field model defines "
+            + ", ".join(sorted(field_model.operating_points))
+        )
+    surrogates = load_surrogates(surrogate_dir) if use_surrogates else None
+    parameter_sets = {name: load_parameter_set(name) for name in available_parameter_sets()}
+    # the code checksums recorded with every case are computed here, once (they parse
+    # source; CPython 3.11's parser is not safe to run from several threads at once)
+    lpm_code_sha256()
+    triage_code_sha256()
+    evaluation_sha256()
+    if warm:
+        warm_up()
+    return EngineModels(
+        baseline=load_default(),
+        parameter_sets=parameter_sets,
+        surrogates=surrogates,
+        field=field_model,
+        operating_point=operating_point,
+        threshold_override=threshold_override,
+        posture_sd_deg=posture_sd_deg,
+        seat_track_sd_mm=seat_track_sd_mm,
+    )
+
+
+def _triage_code_info() -> ModelInfo:
+    return ModelInfo(
+        name="notification-to-answer orchestration (pulse, impact mode, sensor evidence, decision)",
+        version=ENGINE_VERSION,
+        sha256=triage_code_sha256(),
+    )

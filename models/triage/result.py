@@ -1,0 +1,177 @@
+"""The engine's answer: the result types of a triage (decisions, ISS, occupant and case)."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from enum import StrEnum
+
+from models.assumptions import Assumption
+from models.field.features import FieldMode
+from models.impact_mode import ImpactClassification
+from models.notification import (
+    Body,
+    Seat,
+)
+from models.pulse import ProcessedPulse
+
+__all__ = [
+    "LPM_OUTCOME",
+    "UnknownVehicleModel",
+    "IntervalMethod",
+    "Method",
+    "ModelInfo",
+    "TriageDecision",
+    "IssEstimate",
+    "SensorInputs",
+    "OccupantTriage",
+    "TriageResult",
+]
+
+
+#: Outcome of the occupant models' probability.
+LPM_OUTCOME = "ISS15+"
+
+
+class UnknownVehicleModel(ValueError):
+    """The notification names a vehicle parameter set that is not loaded."""
+
+
+class IntervalMethod(StrEnum):
+    """Where an occupant model's 95% intervals come from."""
+
+    #: the PCE surrogates: sensor samples through the point surrogate and its
+    #: bootstrap replicates, widened by held-out calibrated margins
+    PCE_BOOTSTRAP = "pce_bootstrap"
+    #: direct occupant-model runs over the +/-1.96 SD sensor box
+    LPM_SENSOR_BOX = "lpm_sensor_box"
+
+
+class Method(StrEnum):
+    """How an occupant was answered.
+
+    The decision is always the field model's. ``LPM``: an occupant model ran and
+    explains it (measures, region AIS, ISS); ``FIELD``: no occupant model applies
+    (PDOF between the models' ranges, a second-row seat) or it failed.
+    """
+
+    LPM = "lpm"
+    FIELD = "field"
+
+
+@dataclass(frozen=True)
+class ModelInfo:
+    """Name, version and checksum of one model artifact (recorded with every case)."""
+
+    name: str
+    version: str
+    sha256: str
+
+
+@dataclass(frozen=True)
+class TriageDecision:
+    """A trauma-center decision on a probability with its 95% interval.
+
+    Attributes
+    ----------
+    iss15_plus : bool
+        Positive: likely ISS 15+, transport to a Level I trauma center.
+    probability : float
+        Probability of `outcome`.
+    probability_ci95 : (float, float)
+    threshold : float
+        Positive when ``probability >= threshold``.
+    recommendation : str
+    outcome : str
+        What `probability` is a probability of (``MAIS3+`` for the field model,
+        ``ISS15+`` for the occupant models, the police-reported outcome for the
+        baseline).
+    model : str
+        Name of the model that gave it.
+    operating_point : str or None
+        The named operating point the threshold belongs to (field model).
+    """
+
+    iss15_plus: bool
+    probability: float
+    probability_ci95: tuple[float, float]
+    threshold: float
+    recommendation: str
+    outcome: str = LPM_OUTCOME
+    model: str = "occupant_models"
+    operating_point: str | None = None
+
+
+@dataclass(frozen=True)
+class IssEstimate:
+    """ISS point estimate and, where available, its 95% interval."""
+
+    estimate: int
+    ci95: tuple[float, float] | None = None
+
+
+@dataclass(frozen=True)
+class SensorInputs:
+    """The occupant inputs an occupant-model answer was computed at.
+
+    Attributes
+    ----------
+    posture_deg, seat_track_mm : float
+        Lumbar flexion (deg) and seat track (mm forward of mid track) of the
+        direct run, after the sensor evidence was resolved and the values
+        clamped to the models' domain.
+    posture_sd_deg, seat_track_sd_mm : float
+        Standard deviations propagated into the intervals (deg, mm).
+    """
+
+    posture_deg: float
+    posture_sd_deg: float
+    seat_track_mm: float
+    seat_track_sd_mm: float
+
+
+@dataclass(frozen=True)
+class OccupantTriage:
+    """The triage of one occupant.
+
+    `triage` is the decision (the field model's); `occupant_model` the occupant
+    models' own decision on their P(ISS >= 15) (None without an occupant model),
+    `baseline` the statistical baseline's: both second opinions. The remaining
+    fields are the occupant model's explanation (None without one).
+    """
+
+    seat: Seat
+    body: Body
+    impact: ImpactClassification
+    method: Method
+    triage: TriageDecision
+    baseline: TriageDecision
+    field_mode: FieldMode = FieldMode.FRONTAL
+    occupant_model: TriageDecision | None = None
+    iss: IssEstimate | None = None
+    region_ais: Mapping[str, int] | None = None
+    measures: Mapping[str, float] | None = None
+    measures_ci95: Mapping[str, tuple[float, float]] | None = None
+    interval_method: IntervalMethod | None = None
+    point_outside_interval: bool = False
+    #: occupant models only: P(ISS >= 15) from the risk curves before the
+    #: zero-load correction, and the same occupant's P(ISS >= 15) at zero load
+    #: (`models.risk_calibration`)
+    probability_uncorrected: float | None = None
+    probability_zero_load: float | None = None
+    #: occupant models only: the posture and seat track used, with their SDs
+    sensor_inputs: SensorInputs | None = None
+
+
+@dataclass(frozen=True)
+class TriageResult:
+    """The engine's answer to a notification."""
+
+    event_id: str
+    triage: TriageDecision
+    occupants: tuple[OccupantTriage, ...]
+    pulse: ProcessedPulse
+    assumptions: tuple[Assumption, ...]
+    engine_version: str
+    models: Mapping[str, ModelInfo]
+    timings_ms: Mapping[str, float] = field(compare=False)

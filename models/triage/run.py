@@ -1,0 +1,148 @@
+"""The run: one notification in, one triage result out (see :mod:`models.triage`)."""
+
+from __future__ import annotations
+
+import dataclasses
+import time
+
+from models import ENGINE_VERSION
+from models.assumptions import Assumption, AssumptionCode
+from models.field.features import FieldMode
+from models.notification import (
+    CrashNotification,
+    Occupant,
+)
+from models.pulse import process_pulse
+from models.triage.decision import _field_decision, _worst
+from models.triage.field_evidence import OccupantEvidence, _field_assumptions, _occupant_evidence
+from models.triage.loading import EngineModels
+from models.triage.result import (
+    Method,
+    ModelInfo,
+    OccupantTriage,
+    TriageDecision,
+    TriageResult,
+    UnknownVehicleModel,
+)
+
+__all__ = ["triage"]
+
+
+def _used_models(models: EngineModels, vehicle_model: str, used_lpm: bool) -> dict[str, ModelInfo]:
+    infos = models.model_infos(vehicle_model)
+    if not used_lpm:
+        keep = ("baseline", "field_model", "triage_code")
+        return {k: infos[k] for k in keep if k in infos}
+    return infos
+
+
+def _occupant_triage(
+    occupant: Occupant, evidence: OccupantEvidence, decision: TriageDecision, mode: FieldMode
+) -> OccupantTriage:
+    decided = OccupantTriage(
+        seat=occupant.seat,
+        body=occupant.body,
+        impact=evidence.impact,
+        method=Method.FIELD,
+        triage=decision,
+        baseline=evidence.baseline,
+        field_mode=mode,
+    )
+    answer = evidence.occupant_model
+    if answer is None:
+        return decided
+    return dataclasses.replace(
+        decided,
+        method=Method.LPM,
+        occupant_model=answer.decision,
+        iss=answer.iss,
+        region_ais=answer.region_ais,
+        measures=answer.measures,
+        measures_ci95=answer.measures_ci95,
+        interval_method=answer.interval_method,
+        point_outside_interval=answer.point_outside_interval,
+        probability_uncorrected=answer.probability_uncorrected,
+        probability_zero_load=answer.probability_zero_load,
+        sensor_inputs=answer.sensor_inputs,
+    )
+
+
+def triage(notification: CrashNotification, models: EngineModels) -> TriageResult:
+    """Triage every occupant of a notification.
+
+    Parameters
+    ----------
+    notification : CrashNotification
+    models : EngineModels
+        With a field model.
+
+    Returns
+    -------
+    TriageResult
+
+    Raises
+    ------
+    UnknownVehicleModel
+        When `notification.vehicle_model` names no loaded parameter set.
+    ValueError
+        When the pulse cannot be processed (the message names the field), or
+        `models` holds no field model.
+    """
+    if models.field is None:
+        raise ValueError("the engine models hold no field model: triage needs one")
+    field_model = models.field
+    if notification.vehicle_model not in models.vehicle_models:
+        raise UnknownVehicleModel(
+            f"unknown vehicle model {notification.vehicle_model!r}; known: "
+            + ", ".join(sorted(models.vehicle_models))
+        )
+    t0 = time.perf_counter()
+    pulse = process_pulse(notification.pulse)
+    t1 = time.perf_counter()
+
+    assumptions: list[Assumption] = []
+    if notification.rollover:
+        assumptions.append(
+            Assumption(
+                AssumptionCode.ROLLOVER_REPORTED,
+                "rollover reported: the field model's probability is that of a rollover (it is "
+                "in its data); the occupant models see only the planar crash pulse",
+            )
+        )
+    if notification.multiple_impacts:
+        assumptions.append(
+            Assumption(
+                AssumptionCode.MULTIPLE_IMPACTS_REPORTED,
+                "multiple impacts reported: the field model's probability includes them (they "
+                "are in its data); the occupant models run the recorded pulse as one event",
+            )
+        )
+
+    occupants: list[OccupantTriage] = []
+    field_ms = 0.0
+    for i, occupant in enumerate(notification.occupants):
+        evidence = _occupant_evidence(i, occupant, notification, pulse, models, assumptions)
+        tf = time.perf_counter()
+        prediction = field_model.predict(evidence.field_inputs)
+        decision = _field_decision(field_model, models, prediction)
+        field_ms += 1000.0 * (time.perf_counter() - tf)
+        assumptions.extend(_field_assumptions(i, occupant, prediction, field_model))
+        occupants.append(_occupant_triage(occupant, evidence, decision, prediction.mode))
+    used_lpm = any(o.method is Method.LPM for o in occupants)
+    t2 = time.perf_counter()
+
+    return TriageResult(
+        event_id=notification.event_id,
+        triage=_worst([o.triage for o in occupants]),
+        occupants=tuple(occupants),
+        pulse=pulse,
+        assumptions=tuple(assumptions),
+        engine_version=ENGINE_VERSION,
+        models=_used_models(models, notification.vehicle_model, used_lpm),
+        timings_ms={
+            "pulse": 1000.0 * (t1 - t0),
+            "occupants": 1000.0 * (t2 - t1),
+            "field_model": field_ms,
+            "engine_total": 1000.0 * (t2 - t0),
+        },
+    )
