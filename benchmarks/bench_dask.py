@@ -37,7 +37,7 @@ WORKERS = (1, 2)
 
 
 def _inputs(n: int) -> list[str]:
-    from service.cases.notification import EXAMPLE_NOTIFICATIONS
+    from service.cases.examples import EXAMPLE_NOTIFICATIONS
 
     kinds = list(EXAMPLE_NOTIFICATIONS)
     out = []

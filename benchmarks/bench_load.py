@@ -64,7 +64,8 @@ _ENGINE_SCRIPT = """
 import copy, json, sys, time
 from threadpoolctl import threadpool_limits
 from models.triage import load_engine_models, triage
-from service.cases.notification import EXAMPLE_NOTIFICATIONS, CrashNotificationIn
+from service.cases.examples import EXAMPLE_NOTIFICATIONS
+from service.cases.notification import CrashNotificationIn
 repeats = int(sys.argv[1])
 one = copy.deepcopy(EXAMPLE_NOTIFICATIONS["summary"]["value"])
 one["occupants"] = one["occupants"][:1]
@@ -210,7 +211,7 @@ def _load(server: _Server, template: dict[str, Any], connections: int, seconds: 
 
 
 def _batch_input(path: Path, n: int) -> None:
-    from service.cases.notification import EXAMPLE_NOTIFICATIONS
+    from service.cases.examples import EXAMPLE_NOTIFICATIONS
 
     kinds = sorted(EXAMPLE_NOTIFICATIONS)
     lines = []
@@ -313,7 +314,7 @@ def main() -> None:
     parser.add_argument("--no-write", action="store_true", help="print only")
     args = parser.parse_args()
 
-    from service.cases.notification import EXAMPLE_NOTIFICATIONS
+    from service.cases.examples import EXAMPLE_NOTIFICATIONS
 
     exe = shutil.which("aacn-triage")
     if exe is None:

@@ -43,7 +43,7 @@ def _stats(samples_ms: list[float]) -> tuple[float, float]:
 
 
 def _cases() -> dict[str, dict[str, Any]]:
-    from service.cases.notification import EXAMPLE_NOTIFICATIONS
+    from service.cases.examples import EXAMPLE_NOTIFICATIONS
 
     cases = {f"example {k}": copy.deepcopy(v["value"]) for k, v in EXAMPLE_NOTIFICATIONS.items()}
     five = copy.deepcopy(EXAMPLE_NOTIFICATIONS["delta_v"]["value"])

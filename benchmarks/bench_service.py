@@ -54,7 +54,8 @@ def main() -> None:
     from models.triage import load_engine_models, triage
     from service.app import create_app
     from service.auth import Role, create_api_key
-    from service.cases.notification import EXAMPLE_NOTIFICATIONS, CrashNotificationIn
+    from service.cases.examples import EXAMPLE_NOTIFICATIONS
+    from service.cases.notification import CrashNotificationIn
     from service.settings import Settings
 
     t0 = time.perf_counter()

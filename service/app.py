@@ -26,8 +26,9 @@ from service import __version__, health
 from service.balance import ConnectionBalance, WorkerLoads
 from service.cases import endpoints as cases
 from service.cases import service as cases_service
-from service.cases.notification import EXAMPLE_NOTIFICATIONS, CrashNotificationIn
-from service.cases.veds import EXAMPLE_VEDS, VEDS_MEDIA_TYPE
+from service.cases.examples import EXAMPLE_NOTIFICATIONS, EXAMPLE_VEDS
+from service.cases.notification import CrashNotificationIn
+from service.cases.veds import VEDS_MEDIA_TYPE
 from service.context import ServiceContext, engine_models_for
 from service.db import migrate
 from service.db.session import make_engine, make_sessionmaker

@@ -16,7 +16,7 @@ from typing import Any
 import pytest
 from fastapi.testclient import TestClient
 
-from service.cases.notification import EXAMPLE_NOTIFICATIONS
+from service.cases.examples import EXAMPLE_NOTIFICATIONS
 from service.settings import Settings
 
 

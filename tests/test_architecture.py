@@ -142,7 +142,7 @@ from fastapi.testclient import TestClient
 from service.app import create_app
 from service.settings import Settings
 from service.auth import Role, create_api_key
-from service.cases.notification import EXAMPLE_NOTIFICATIONS
+from service.cases.examples import EXAMPLE_NOTIFICATIONS
 
 app = create_app(Settings(database_url="sqlite:///" + sys.argv[1]))
 with TestClient(app) as client:

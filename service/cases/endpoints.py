@@ -14,14 +14,8 @@ from pydantic import ValidationError
 
 from service.auth import require_auditor, require_submitter
 from service.cases import service as cases_service
-from service.cases.notification import (
-    CaseList,
-    CaseResult,
-    CrashNotificationIn,
-    ReceivedSource,
-    Rfc3339Text,
-    StoredCase,
-)
+from service.cases.notification import CrashNotificationIn, ReceivedSource, Rfc3339Text
+from service.cases.result import CaseList, CaseResult, StoredCase
 from service.cases.veds import VEDS_MEDIA_TYPE, is_veds_media_type, read_veds
 from service.db.repository import CaseFilters
 from service.deps import ContextDep

@@ -1,10 +1,19 @@
-"""Example responses for the OpenAPI document (a real engine result, rounded)."""
+"""Examples for the OpenAPI document: requests (JSON and VEDS) and responses (a real
+engine result, rounded)."""
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Final
 
-__all__ = ["EXAMPLE_CASE_LIST", "EXAMPLE_CASE_RESULT", "EXAMPLE_STORED_CASE"]
+from models.pulse import haversine, haversine_amplitude_g
+
+__all__ = [
+    "EXAMPLE_CASE_LIST",
+    "EXAMPLE_CASE_RESULT",
+    "EXAMPLE_NOTIFICATIONS",
+    "EXAMPLE_STORED_CASE",
+    "EXAMPLE_VEDS",
+]
 
 #: `POST /v1/cases` answer for the "summary" example notification (the engine as shipped).
 EXAMPLE_CASE_RESULT: dict[str, Any] = {
@@ -189,4 +198,164 @@ EXAMPLE_CASE_LIST: dict[str, Any] = {
         }
     ],
     "next_cursor": "WyIyMDI2LTExLTIzVDA4OjE1OjMxKzAwOjAwIiwgIjBiOWUzYzU1Il0",
+}
+
+
+def _haversine_example(delta_v_kmh: float, duration_ms: float, n: int) -> list[float]:
+    """A short frontal haversine pulse for the OpenAPI example (1 kHz)."""
+    t_s = [i / 1000.0 for i in range(n)]
+    a = haversine(
+        t_s, haversine_amplitude_g(delta_v_kmh, duration_ms / 1000.0), duration_ms / 1000.0
+    )
+    return [round(-float(v), 3) for v in a]
+
+
+EXAMPLE_NOTIFICATIONS: dict[str, dict[str, Any]] = {
+    "summary": {
+        "summary": "Frontal crash, summary pulse",
+        "description": "56 km/h frontal, belted driver with deployed airbag, posture and "
+        "seat position sensed.",
+        "value": {
+            "event_id": "tsp-7d1c2a90-0001",
+            "occurred_at": "2026-11-23T08:15:30Z",
+            "vehicle": {"model": "compact_sedan", "drive_side": "left"},
+            "crash": {
+                "pulse": {"kind": "summary", "delta_v_kmh": 56.0, "pdof_deg": 0.0},
+                "multiple_impacts": False,
+                "rollover": False,
+            },
+            "occupants": [
+                {
+                    "seat": "driver",
+                    "body": "male_50th",
+                    "age_years": 42,
+                    "sex": "male",
+                    "belted": True,
+                    "frontal_airbag": "deployed",
+                    "airbag_fire_time_ms": 15,
+                    "pretensioner_fired": True,
+                    "posture_lumbar_flexion_deg": 5.8,
+                    "seat_track_mm": 0.0,
+                }
+            ],
+        },
+    },
+    "delta_v": {
+        "summary": "Near-side crash, EDR delta-V record",
+        "description": "49 CFR 563 record at 10 ms: a left-side impact on a left-hand-drive "
+        "car; the driver is on the near side (her side and curtain airbags deployed; the EDR "
+        "seat track switch says her seat is forward), the passenger on the far side.",
+        "value": {
+            "event_id": "tsp-7d1c2a90-0002",
+            "occurred_at": "2026-11-23T09:02:11+01:00",
+            "vehicle": {"model": "compact_sedan", "drive_side": "left"},
+            "crash": {
+                "pulse": {
+                    "kind": "delta_v",
+                    "interval_ms": 10,
+                    "longitudinal_kmh": [0, -0.5, -1.2, -1.8, -2.1, -2.2, -2.2, -2.2, -2.2],
+                    "lateral_kmh": [0, 6.0, 15.0, 24.0, 29.0, 31.0, 31.5, 31.5, 31.5],
+                },
+                "multiple_impacts": False,
+                "rollover": False,
+            },
+            "occupants": [
+                {
+                    "seat": "driver",
+                    "stature_cm": 162,
+                    "mass_kg": 58,
+                    "age_years": 67,
+                    "sex": "female",
+                    "belted": True,
+                    "frontal_airbag": "not_deployed",
+                    "side_airbag": "deployed",
+                    "seat_track_foremost": True,
+                },
+                {
+                    "seat": "front_passenger",
+                    "body": "male_50th",
+                    "age_years": 35,
+                    "sex": "male",
+                    "belted": False,
+                    "frontal_airbag": "not_deployed",
+                    "side_airbag": "not_deployed",
+                },
+            ],
+        },
+    },
+    "acceleration": {
+        "summary": "Frontal crash, acceleration pulse",
+        "description": "Sensor acceleration at 1 kHz, 48 km/h in 90 ms, unbelted passenger "
+        "leaning forward, seat moved 40 mm forward.",
+        "value": {
+            "event_id": "tsp-7d1c2a90-0003",
+            "occurred_at": "2026-11-23T10:44:00Z",
+            "vehicle": {"model": "compact_sedan", "drive_side": "left"},
+            "crash": {
+                "pulse": {
+                    "kind": "acceleration",
+                    "sample_rate_hz": 1000,
+                    "longitudinal_g": _haversine_example(48.0, 90.0, 121),
+                    "lateral_g": [0.0] * 121,
+                },
+                "multiple_impacts": False,
+                "rollover": False,
+            },
+            "occupants": [
+                {
+                    "seat": "front_passenger",
+                    "body": "female_5th",
+                    "age_years": 29,
+                    "sex": "female",
+                    "belted": False,
+                    "frontal_airbag": "deployed",
+                    "posture_lumbar_flexion_deg": 20.0,
+                    "seat_track_mm": 40.0,
+                }
+            ],
+        },
+    },
+}
+
+
+#: The OpenAPI example of a VEDS body (written for this service in the shape of the
+#: RFC 8148 example): a frontal crash at 20 MPH, a belted driver, a deployed airbag.
+EXAMPLE_VEDS: Final[dict[str, dict[str, str]]] = {
+    "veds_frontal": {
+        "summary": "VEDS 3.1, frontal crash in MPH",
+        "description": "20 MPH (32.19 km/h) at 12 o'clock; a belted driver whose frontal "
+        "airbag deployed. The incident id is the event_id.",
+        "value": """<?xml version="1.0" encoding="UTF-8"?>
+<veds:AutomatedCrashNotification xmlns:veds="http://www.veds.org/acn/3.1"
+    xmlns:nc="http://niem.gov/niem/niem-core/2.0">
+  <veds:Crash>
+    <nc:ActivityIdentification><nc:IdentificationID>tsp-7d1c2a90-0004</nc:IdentificationID>
+    </nc:ActivityIdentification>
+    <nc:ActivityDate><nc:DateTime>2026-11-23T08:15:30Z</nc:DateTime></nc:ActivityDate>
+    <veds:CrashVehicle>
+      <nc:ItemMakeName>Toyota</nc:ItemMakeName>
+      <nc:ItemModelName>Yaris</nc:ItemModelName>
+      <nc:ItemModelYearDate>2010</nc:ItemModelYearDate>
+      <veds:Airbag>
+        <veds:AirbagCategoryCode>FRONT</veds:AirbagCategoryCode>
+        <veds:AirbagDeployedIndicator>true</veds:AirbagDeployedIndicator>
+      </veds:Airbag>
+      <veds:VehicleCrashPulse>
+        <veds:CrashPulseChangeInVelocityMeasure>
+          <nc:MeasurePointValue>20</nc:MeasurePointValue>
+          <nc:MeasureUnitText>MPH</nc:MeasureUnitText>
+        </veds:CrashPulseChangeInVelocityMeasure>
+        <veds:CrashPulsePrincipalDirectionOfForceValue>12</veds:CrashPulsePrincipalDirectionOfForceValue>
+        <veds:CrashPulseRolloverQuarterTurnsValue>0</veds:CrashPulseRolloverQuarterTurnsValue>
+      </veds:VehicleCrashPulse>
+      <veds:VehicleSeat>
+        <veds:VehicleSeatLocationCategoryCode>1</veds:VehicleSeatLocationCategoryCode>
+        <veds:VehicleSeatOccupiedIndicator>true</veds:VehicleSeatOccupiedIndicator>
+        <veds:VehicleSeatbeltFastenedIndicator>true</veds:VehicleSeatbeltFastenedIndicator>
+      </veds:VehicleSeat>
+    </veds:CrashVehicle>
+  </veds:Crash>
+</veds:AutomatedCrashNotification>
+""",
+    }
 }

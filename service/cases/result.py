@@ -1,25 +1,318 @@
-"""Engine results -> wire models (one place, used by the API and the CLI)."""
+"""The wire out: the response models of ``/v1/cases`` and the conversion of an engine
+result into them (one place, used by the API, the pages and the command line)."""
 
 from __future__ import annotations
 
 import dataclasses
 from datetime import datetime
+from typing import Any
 
-from models.assumptions import Assumption
-from models.triage import OccupantTriage, TriageDecision, TriageResult
-from service.cases.notification import (
-    AssumptionOut,
-    CaseResult,
-    HaversineOut,
-    IssOut,
-    ModelVersionOut,
-    OccupantOut,
-    PulseOut,
-    SensorInputsOut,
-    TriageOut,
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Field,
 )
 
-__all__ = ["to_case_result"]
+from models import notification as engine
+from models.assumptions import DESCRIPTIONS, Assumption, AssumptionCode
+from models.field.features import FieldMode
+from models.impact_mode import ImpactMode
+from models.triage import IntervalMethod, Method, OccupantTriage, TriageDecision, TriageResult
+from service.cases.examples import EXAMPLE_CASE_LIST, EXAMPLE_CASE_RESULT, EXAMPLE_STORED_CASE
+from service.cases.notification import SourceFormat
+
+__all__ = [
+    "OutModel",
+    "TriageOut",
+    "IssOut",
+    "HaversineOut",
+    "PulseOut",
+    "SensorInputsOut",
+    "OccupantOut",
+    "AssumptionOut",
+    "ModelVersionOut",
+    "CaseResult",
+    "StoredCase",
+    "CaseSummary",
+    "CaseList",
+    "to_case_result",
+]
+
+
+class OutModel(BaseModel):
+    """Base of the response models."""
+
+    model_config = ConfigDict(frozen=True)
+
+
+class TriageOut(OutModel):
+    """A trauma-center decision on a probability of serious injury."""
+
+    iss15_plus: bool = Field(
+        description="True: likely ISS >= 15, transport to a Level I trauma center "
+        "(`probability` >= `threshold`)."
+    )
+    probability: float = Field(
+        ge=0,
+        le=1,
+        description="Probability of `outcome`. The decision (`triage` of a case or occupant) is "
+        "the field risk model's P(MAIS 3+), calibrated on real NASS-CDS crashes; MAIS 3+ is the "
+        "stand-in for ISS 15+ (broader: one AIS 3 injury alone is ISS 9). Second opinions: the "
+        "occupant models' P(ISS >= 15) attributable to the crash loads (`occupant_model`), and "
+        "the statistical baseline's police-reported A+K risk (`baseline`).",
+    )
+    probability_ci95: tuple[float, float] = Field(
+        description="95% interval of `probability` [low, high]; it holds `probability`."
+    )
+    threshold: float = Field(description="Decision threshold on `probability`.")
+    recommendation: str = Field(description="What to do with the patient, in words.")
+    outcome: str = Field(
+        description="What `probability` is a probability of: `MAIS3+` (field model), "
+        "`ISS15+` (occupant models), `police_A+K` (statistical baseline).",
+        examples=["MAIS3+"],
+    )
+    model: str = Field(description="The model that gave it.", examples=["field_mais3@2.0.0"])
+    operating_point: str | None = Field(
+        default=None,
+        description="Named operating point of the field model whose threshold decided "
+        "(`sens80_per_mode`, the default: MAIS 3+ sensitivity >= 0.80 within frontal and "
+        "within near-side crashes; `sens80`: >= 0.80 over all modes at the smallest flagged "
+        "share; `bahouth`: 0.10 frontal/rear, 0.05 side/rollover); null when "
+        "`AACN_TRIAGE_THRESHOLD` overrides it or for second opinions.",
+    )
+
+
+class IssOut(OutModel):
+    """Injury Severity Score estimate."""
+
+    estimate: int = Field(ge=0, le=75, description="ISS point estimate (Baker rule).")
+    ci95: tuple[float, float] | None = Field(
+        default=None, description="95% interval of ISS, when the engine provides it."
+    )
+
+
+class HaversineOut(OutModel):
+    """Haversine fit a(t) = A sin^2(pi t / T) of the resultant pulse."""
+
+    amplitude_g: float = Field(description="A, g.")
+    duration_ms: float = Field(description="T, ms.")
+    r_squared: float = Field(description="Coefficient of determination of the fit.")
+
+
+class PulseOut(OutModel):
+    """What the engine derived from the pulse."""
+
+    delta_v_kmh: float = Field(description="Resultant delta-V, km/h.")
+    delta_v_longitudinal_kmh: float = Field(description="x delta-V, km/h.")
+    delta_v_lateral_kmh: float = Field(description="y delta-V, km/h.")
+    pdof_deg: float = Field(description="Principal direction of force, deg clockwise.")
+    peak_accel_g: float = Field(description="Peak resultant acceleration, g.")
+    duration_ms: float = Field(description="Pulse duration, ms.")
+    haversine: HaversineOut
+
+
+class SensorInputsOut(OutModel):
+    """The posture and seat track an occupant-model answer was computed at."""
+
+    posture_deg: float = Field(
+        description="Lumbar flexion of the direct run, deg (after the evidence was resolved "
+        "and the value clamped to the models' range)."
+    )
+    posture_sd_deg: float = Field(description="Posture SD propagated into the intervals, deg.")
+    seat_track_mm: float = Field(
+        description="Seat track of the direct run, mm forward of mid track (resolved, clamped)."
+    )
+    seat_track_sd_mm: float = Field(description="Seat track SD propagated into the intervals, mm.")
+
+
+class OccupantOut(OutModel):
+    """The triage of one occupant."""
+
+    seat: engine.Seat
+    body: engine.Body = Field(description="Dummy class the engine used.")
+    impact_mode: ImpactMode = Field(
+        description="The occupant's impact mode: the nearest of the four occupant models' axes "
+        "to the PDOF, for this seat."
+    )
+    field_mode: FieldMode = Field(
+        description="The crash mode the field model used: `rollover` when reported, else "
+        "`impact_mode`."
+    )
+    impact_angle_deg: float = Field(description="PDOF relative to the mode's axis, deg.")
+    in_lpm_coverage: bool = Field(description="The PDOF lies inside an occupant model's range.")
+    method: Method = Field(
+        description="How the occupant was answered. The decision is always the field model's; "
+        "`lpm`: an occupant model ran and explains it (measures, region AIS, ISS, its own "
+        "decision in `occupant_model`); `field`: no occupant model applies (PDOF between the "
+        "models' ranges, a second-row seat) or it failed."
+    )
+    iss: IssOut | None = Field(default=None, description="ISS where the engine provides it.")
+    region_ais: dict[str, int] | None = Field(
+        default=None, description="AIS per ISS body region, where the engine provides it."
+    )
+    measures: dict[str, float] | None = Field(
+        default=None,
+        description="Injury measures from the direct occupant-model run, where computed: "
+        "hic15, nij, chest_deflection_mm, chest_vc_m_s, chest_a3ms_g, chest_cti, "
+        "abdomen_vc_m_s.",
+    )
+    measures_ci95: dict[str, tuple[float, float]] | None = Field(
+        default=None,
+        description="95% interval of each measure under sensor uncertainty; for "
+        "`pce_bootstrap`, it includes the surrogate's own error (held-out calibrated margin).",
+    )
+    interval_method: IntervalMethod | None = Field(
+        default=None,
+        description="Where the occupant model's 95% intervals come from: `pce_bootstrap` "
+        "(surrogates, bootstrap replicates, widened by margins calibrated on held-out "
+        "occupant-model runs) or `lpm_sensor_box` (direct runs over the +/-1.96 SD sensor "
+        "box); null without an occupant model. The decided probability's interval is the field "
+        "model's (bootstrap refits).",
+    )
+    point_outside_interval: bool = Field(
+        default=False,
+        description="The direct occupant-model estimate lies outside the surrogate interval.",
+    )
+    probability_uncorrected: float | None = Field(
+        default=None,
+        ge=0,
+        le=1,
+        description="Occupant models only: P(ISS >= 15) from the published risk curves before "
+        "the zero-load correction (the mean over the spread when posture or seat position was "
+        "not sensed). `occupant_model.probability` = (this - probability_zero_load) / "
+        "(1 - probability_zero_load), clipped to [0, 1] (Abbott's formula).",
+    )
+    probability_zero_load: float | None = Field(
+        default=None,
+        ge=0,
+        le=1,
+        description="Occupant models only: the same occupant's P(ISS >= 15) from the risk "
+        "curves with every measure at zero (about 0.054: the curves' floor, not crash risk).",
+    )
+    sensor_inputs: SensorInputsOut | None = Field(
+        default=None,
+        description="Occupant models only: the posture and seat track the answer was computed "
+        "at, with the SDs its intervals propagate (a reading and its sensor SD, or the range "
+        "the evidence allows; see `assumptions`).",
+    )
+    triage: TriageOut = Field(
+        description="The decision: the field model's P(MAIS 3+) at its operating point."
+    )
+    occupant_model: TriageOut | None = Field(
+        default=None,
+        description="The occupant models' own decision on their P(ISS >= 15) attributable to "
+        "the crash loads, at Bahouth's 0.10 frontal/rear, 0.05 side (second opinion, the "
+        "physics explanation); null without an occupant model.",
+    )
+    baseline: TriageOut = Field(
+        description="The statistical baseline's answer (second opinion; outcome is "
+        "police-reported serious injury, a proxy for ISS15+)."
+    )
+
+
+class AssumptionOut(OutModel):
+    """One assumption of an answer: a stable code, the occupant, the words."""
+
+    code: AssumptionCode = Field(
+        description="Stable code (act on it; the codes and their meaning: "
+        + "; ".join(f"`{c.value}`: {d}" for c, d in DESCRIPTIONS.items())
+        + ")."
+    )
+    message: str = Field(description="The assumption in words, with its numbers.")
+    occupant: int | None = Field(
+        default=None, description="Index of the occupant it concerns; null for the whole crash."
+    )
+
+
+class ModelVersionOut(OutModel):
+    """Version and checksum of one model artifact."""
+
+    version: str = Field(description="Version of the model artifact.")
+    sha256: str = Field(description="SHA-256 of the artifact's bytes.")
+
+
+class CaseResult(OutModel):
+    """The answer to one notification."""
+
+    model_config = ConfigDict(frozen=True, json_schema_extra={"examples": [EXAMPLE_CASE_RESULT]})
+
+    case_id: str | None = Field(description="Id of the stored case (null from the CLI).")
+    event_id: str = Field(description="The sender's event id.")
+    received_at: datetime = Field(description="When the service received the notification.")
+    triage: TriageOut = Field(description="The case-level decision: the worst occupant's.")
+    occupants: list[OccupantOut] = Field(description="One result per occupant, in input order.")
+    pulse: PulseOut
+    assumptions: list[AssumptionOut] = Field(
+        default_factory=list, description="What the engine assumed or clamped."
+    )
+    engine_version: str = Field(description="Version of the engine code.")
+    models: dict[str, ModelVersionOut] = Field(description="Every model used: version, sha256.")
+    timings_ms: dict[str, float] = Field(description="Time spent per step, ms.")
+    stored: bool = Field(
+        default=True,
+        description="The case is committed to the audit store (201, and replays of a stored "
+        "case). False with `spooled`: the store could not take it (database down, read-only or "
+        "full), so the case was recorded durably in the service's local spool and answered "
+        "with 202; it is stored, under this `case_id`, once the store returns.",
+    )
+    spooled: bool = Field(
+        default=False,
+        description="The case is recorded in the local spool, waiting to be stored (202).",
+    )
+
+
+class StoredCase(OutModel):
+    """A stored case, as the audit trail holds it."""
+
+    model_config = ConfigDict(frozen=True, json_schema_extra={"examples": [EXAMPLE_STORED_CASE]})
+
+    case_id: str = Field(description="Id of the case.")
+    event_id: str = Field(description="The sender's event id.")
+    client_name: str = Field(description="Name of the API key that submitted it.")
+    received_at: datetime = Field(description="When the notification was received.")
+    stored_at: datetime = Field(description="When the case was committed.")
+    request_sha256: str = Field(description="SHA-256 of the canonical JSON of the notification.")
+    notification: dict[str, Any] = Field(
+        description="The notification as received; for a VEDS document, the JSON notification "
+        "it was mapped to (the XML itself is `source_document`)."
+    )
+    result: CaseResult = Field(description="The result exactly as it was answered.")
+    models: dict[str, ModelVersionOut] = Field(description="Every model used: version, sha256.")
+    source_format: SourceFormat = Field(
+        default="json",
+        description="How the notification came in: `json` (this contract) or `veds` "
+        "(`application/EmergencyCallData.VEDS+xml`, RFC 8148).",
+    )
+    source_document: str | None = Field(
+        default=None,
+        description="The VEDS XML document exactly as received (null for JSON).",
+    )
+    source_mapping: dict[str, Any] | None = Field(
+        default=None,
+        description="For VEDS: which elements were mapped to which fields, what was assumed "
+        "(assumption codes) and what was not used (null for JSON).",
+    )
+
+
+class CaseSummary(OutModel):
+    """One row of the case list."""
+
+    case_id: str = Field(description="Id of the case.")
+    event_id: str = Field(description="The sender's event id.")
+    client_name: str = Field(description="Name of the API key that submitted it.")
+    received_at: datetime = Field(description="When the notification was received.")
+    iss15_plus: bool = Field(description="Case-level decision.")
+    probability: float = Field(description="Case-level probability.")
+    impact_modes: list[str] = Field(description="Impact mode of each occupant.")
+
+
+class CaseList(OutModel):
+    """A page of cases, newest first."""
+
+    model_config = ConfigDict(frozen=True, json_schema_extra={"examples": [EXAMPLE_CASE_LIST]})
+
+    items: list[CaseSummary] = Field(description="The cases of this page.")
+    next_cursor: str | None = Field(description="Pass as `cursor` for the next page; null at end.")
 
 
 def _triage_out(d: TriageDecision) -> TriageOut:

@@ -25,15 +25,8 @@ from models.assumptions import Assumption
 from models.pulse import PulseError
 from models.triage import EngineModels, Method, UnknownVehicleModel, triage
 from service.auth import Caller
-from service.cases.notification import (
-    CaseList,
-    CaseResult,
-    CaseSummary,
-    CrashNotificationIn,
-    ReceivedSource,
-    StoredCase,
-)
-from service.cases.result import to_case_result
+from service.cases.notification import CrashNotificationIn, ReceivedSource
+from service.cases.result import CaseList, CaseResult, CaseSummary, StoredCase, to_case_result
 from service.context import ServiceContext
 from service.db import repository
 from service.db.spool import SpoolEntry, SpoolError

@@ -39,33 +39,26 @@ mapped and never logged; the document itself is kept with the case for audit.
 from __future__ import annotations
 
 import hashlib
-import io
 import json
 import re
-from collections.abc import Iterator
 from dataclasses import dataclass, field
 from datetime import datetime
 from decimal import Decimal
 from typing import Any, Final
-from xml.etree.ElementTree import Element, ParseError
+from xml.etree.ElementTree import Element
 
-from defusedxml import DefusedXmlException
-from defusedxml.ElementTree import iterparse
 from pydantic import ValidationError
 
 from models import limits, units
 from models.assumptions import Assumption, AssumptionCode
 from models.notification import AirbagState, Seat
 from service.cases.notification import CrashNotificationIn, ReceivedSource
-from service.problems import FieldError, MalformedXml, UnprocessableNotification
+from service.cases.veds_xml import J_NAMESPACE, NC_NAMESPACE, VEDS_NAMESPACES, _qualified, parse_xml
+from service.problems import FieldError, UnprocessableNotification
 
 __all__ = [
-    "EXAMPLE_VEDS",
     "KM_PER_MILE",
-    "MAX_DEPTH",
-    "MAX_ELEMENTS",
     "VEDS_MEDIA_TYPE",
-    "VEDS_NAMESPACES",
     "VedsNotification",
     "clock_to_pdof_deg",
     "delta_v_to_kmh",
@@ -73,28 +66,16 @@ __all__ = [
     "read_veds",
 ]
 
+
 #: The media type of RFC 8148 section 6 (compared case-insensitively).
 VEDS_MEDIA_TYPE: Final = "application/EmergencyCallData.VEDS+xml"
-#: VEDS namespaces read, with the version they stand for.
-VEDS_NAMESPACES: Final[dict[str, str]] = {
-    "http://www.veds.org/acn/3.1": "3.1",
-    "http://www.veds.org/acn/1.0": "1.0",
-}
-#: NIEM 2.0 core and justice (jxdm 4.1) namespaces of the elements VEDS borrows.
-NC_NAMESPACE: Final = "http://niem.gov/niem/niem-core/2.0"
-J_NAMESPACE: Final = "http://niem.gov/niem/domains/jxdm/4.1"
+
 
 #: Kilometres in one international mile, exactly (:data:`models.units.KM_PER_MILE`,
 #: the one home of the constant), as a decimal. Applied in decimal arithmetic: an
 #: MPH value and its exact KPH twin give the same float.
 KM_PER_MILE: Final = Decimal(repr(units.KM_PER_MILE))
-#: Deepest element nesting accepted. [R] A VEDS 3.1 document nests 7 levels
-#: (root, Crash, CrashVehicle, VehicleCrashPulse, measure, value); 32 leaves room
-#: for extensions and refuses crafted nesting long before it costs anything.
-MAX_DEPTH: Final = 32
-#: Most elements accepted. [R] The full VEDS 3.1 example has about 130; 5,000 is
-#: room for many seats, airbags and pulses, and bounds the work on a crafted body.
-MAX_ELEMENTS: Final = 5_000
+
 
 #: VEDS seat location codes (VehicleSeatLocationCategoryCode) and the seats of
 #: the service; codes 6-8 (third row) and 9 (front row middle) have no seat here.
@@ -109,16 +90,23 @@ SEAT_CODES: Final[dict[str, Seat | None]] = {
     "8": None,
     "9": None,
 }
+
+
 _SEAT_NAMES: Final = {
     "6": "third row left",
     "7": "third row middle",
     "8": "third row right",
     "9": "front row middle",
 }
+
+
 #: VEDS AirbagCategoryCode values; ROOF and SEAT (belt) airbags have no field here.
 AIRBAG_CATEGORIES: Final = frozenset({"FRONT", "SIDE", "CURTAIN", "ROOF", "SEAT"})
+
+
 #: Delta-V units (nc:MeasureUnitText) and their factor to km/h.
 DELTA_V_UNITS: Final[dict[str, Decimal]] = {"KPH": Decimal(1), "MPH": KM_PER_MILE}
+
 
 #: Notification fields VEDS cannot carry, and the code of what the engine then assumes
 #: (recorded in every VEDS case's mapping: "occupant age unknown" and the like).
@@ -130,60 +118,22 @@ NOT_IN_VEDS: Final[tuple[tuple[str, AssumptionCode], ...]] = (
     ("occupants[].seat_track_mm", AssumptionCode.SEAT_POSITION_NOT_SENSED),
 )
 
-_PREFIX_OF: Final = {NC_NAMESPACE: "nc", J_NAMESPACE: "j", **dict.fromkeys(VEDS_NAMESPACES, "veds")}
+
 #: xsd:decimal's lexical form (no exponent, no underscores, no NaN).
 _DECIMAL = re.compile(r"^[+-]?(\d{1,12}(\.\d{0,12})?|\.\d{1,12})$")
+
+
 _SMALL_INT = re.compile(r"^\+?\d{1,3}$")
+
+
 _EVENT_ID = re.compile(r"^[\x21-\x7e]{1,128}$")
-_ENCODING = re.compile(rb"^<\?xml[^>]*?encoding\s*=\s*[\"']([A-Za-z0-9._-]+)[\"']")
+
+
 _BOOLEANS: Final = {"true": True, "1": True, "false": False, "0": False}
 
 
 def _said(flag: bool | None) -> str:
     return "absent" if flag is None else str(flag).lower()
-
-
-#: The OpenAPI example of a VEDS body (written for this service in the shape of the
-#: RFC 8148 example): a frontal crash at 20 MPH, a belted driver, a deployed airbag.
-EXAMPLE_VEDS: Final[dict[str, dict[str, str]]] = {
-    "veds_frontal": {
-        "summary": "VEDS 3.1, frontal crash in MPH",
-        "description": "20 MPH (32.19 km/h) at 12 o'clock; a belted driver whose frontal "
-        "airbag deployed. The incident id is the event_id.",
-        "value": """<?xml version="1.0" encoding="UTF-8"?>
-<veds:AutomatedCrashNotification xmlns:veds="http://www.veds.org/acn/3.1"
-    xmlns:nc="http://niem.gov/niem/niem-core/2.0">
-  <veds:Crash>
-    <nc:ActivityIdentification><nc:IdentificationID>tsp-7d1c2a90-0004</nc:IdentificationID>
-    </nc:ActivityIdentification>
-    <nc:ActivityDate><nc:DateTime>2026-11-23T08:15:30Z</nc:DateTime></nc:ActivityDate>
-    <veds:CrashVehicle>
-      <nc:ItemMakeName>Toyota</nc:ItemMakeName>
-      <nc:ItemModelName>Yaris</nc:ItemModelName>
-      <nc:ItemModelYearDate>2010</nc:ItemModelYearDate>
-      <veds:Airbag>
-        <veds:AirbagCategoryCode>FRONT</veds:AirbagCategoryCode>
-        <veds:AirbagDeployedIndicator>true</veds:AirbagDeployedIndicator>
-      </veds:Airbag>
-      <veds:VehicleCrashPulse>
-        <veds:CrashPulseChangeInVelocityMeasure>
-          <nc:MeasurePointValue>20</nc:MeasurePointValue>
-          <nc:MeasureUnitText>MPH</nc:MeasureUnitText>
-        </veds:CrashPulseChangeInVelocityMeasure>
-        <veds:CrashPulsePrincipalDirectionOfForceValue>12</veds:CrashPulsePrincipalDirectionOfForceValue>
-        <veds:CrashPulseRolloverQuarterTurnsValue>0</veds:CrashPulseRolloverQuarterTurnsValue>
-      </veds:VehicleCrashPulse>
-      <veds:VehicleSeat>
-        <veds:VehicleSeatLocationCategoryCode>1</veds:VehicleSeatLocationCategoryCode>
-        <veds:VehicleSeatOccupiedIndicator>true</veds:VehicleSeatOccupiedIndicator>
-        <veds:VehicleSeatbeltFastenedIndicator>true</veds:VehicleSeatbeltFastenedIndicator>
-      </veds:VehicleSeat>
-    </veds:CrashVehicle>
-  </veds:Crash>
-</veds:AutomatedCrashNotification>
-""",
-    }
-}
 
 
 def is_veds_media_type(content_type: str) -> bool:
@@ -238,103 +188,6 @@ class VedsNotification:
     notification: CrashNotificationIn
     document: dict[str, Any]
     source: ReceivedSource
-
-
-# --------------------------------------------------------------------- reading
-
-
-def _refuse_xml(reason: str, *, field: str = "body", kind: str = "xml_malformed") -> MalformedXml:
-    return MalformedXml(
-        f"The VEDS document was refused: {reason}",
-        errors=[FieldError(field=field, reason=reason, type=kind)],
-    )
-
-
-def _qualified(tag: str) -> str:
-    """``{namespace}Local`` as ``prefix:Local`` (the namespace itself when unknown)."""
-    if tag.startswith("{"):
-        ns, _, local = tag[1:].partition("}")
-        prefix = _PREFIX_OF.get(ns)
-        return f"{prefix}:{local}" if prefix else tag
-    return tag
-
-
-def _check_encoding(raw: bytes) -> None:
-    if raw.startswith((b"\xff\xfe", b"\xfe\xff", b"\x00", b"\x4c\x6f\xa7\x94")):
-        raise _refuse_xml("the document must be encoded in UTF-8", kind="xml_encoding")
-    body = raw[3:] if raw.startswith(b"\xef\xbb\xbf") else raw
-    declared = _ENCODING.match(body.lstrip())
-    if declared and declared.group(1).decode("ascii").lower() not in ("utf-8", "utf8", "us-ascii"):
-        raise _refuse_xml(
-            f"the declared encoding {declared.group(1).decode('ascii')!r} is not accepted; "
-            "send UTF-8",
-            kind="xml_encoding",
-        )
-    try:
-        body.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        raise _refuse_xml(f"invalid UTF-8 at byte {exc.start}", kind="xml_encoding") from exc
-
-
-def parse_xml(raw: bytes) -> Element:
-    """Parse one XML document safely; returns its root element.
-
-    Raises
-    ------
-    MalformedXml
-        Not UTF-8; a document type declaration (and so any entity); not well-formed;
-        nesting deeper than `MAX_DEPTH`; more than `MAX_ELEMENTS` elements.
-    """
-    if not raw.strip():
-        raise _refuse_xml("the body is empty", kind="xml_empty")
-    _check_encoding(raw)
-    root: Element | None = None
-    depth = count = 0
-    path: list[str] = []
-    events: Iterator[tuple[str, Element]] = iterparse(
-        io.BytesIO(raw),
-        events=("start", "end"),
-        forbid_dtd=True,
-        forbid_entities=True,
-        forbid_external=True,
-    )
-    try:
-        for event, element in events:
-            if event == "end":
-                depth -= 1
-                path.pop()
-                continue
-            depth += 1
-            count += 1
-            path.append(_qualified(element.tag))
-            if root is None:
-                root = element
-            if depth > MAX_DEPTH:
-                raise _refuse_xml(
-                    f"elements nest deeper than {MAX_DEPTH} levels",
-                    field="/".join(path[1 : MAX_DEPTH + 2]),
-                    kind="xml_too_deep",
-                )
-            if count > MAX_ELEMENTS:
-                raise _refuse_xml(
-                    f"more than {MAX_ELEMENTS} elements",
-                    field="/".join(path[1:]),
-                    kind="xml_too_many_elements",
-                )
-    except DefusedXmlException as exc:
-        raise _refuse_xml(
-            "a document type declaration (DOCTYPE) is not accepted: VEDS needs none, and "
-            f"it would carry entities ({type(exc).__name__})",
-            kind="xml_dtd_forbidden",
-        ) from exc
-    except ParseError as exc:
-        raise _refuse_xml(f"not well-formed XML: {exc}") from exc
-    if root is None:  # pragma: no cover - expat refuses a document without an element
-        raise _refuse_xml("no root element")
-    return root
-
-
-# --------------------------------------------------------------------- mapping
 
 
 def _unprocessable(errors: list[FieldError]) -> UnprocessableNotification:

@@ -26,7 +26,8 @@ from pydantic import ValidationError
 from sqlalchemy.orm import Session, sessionmaker
 
 from models.triage import EngineModels
-from service.cases.notification import CaseResult, CrashNotificationIn
+from service.cases.notification import CrashNotificationIn
+from service.cases.result import CaseResult
 from service.cases.service import evaluate
 from service.db import repository
 from service.db.tables import Case

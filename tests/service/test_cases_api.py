@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from service.cases.notification import EXAMPLE_NOTIFICATIONS
+from service.cases.examples import EXAMPLE_NOTIFICATIONS
 from tests.support import ApiClient, assert_problem, example, summary
 
 

@@ -20,7 +20,8 @@ from datetime import UTC, datetime
 import pytest
 
 from models.triage import EngineModels, load_engine_models
-from service.cases.notification import EXAMPLE_NOTIFICATIONS, CrashNotificationIn
+from service.cases.examples import EXAMPLE_NOTIFICATIONS
+from service.cases.notification import CrashNotificationIn
 from service.cases.service import evaluate
 from tests.paths import ROOT
 

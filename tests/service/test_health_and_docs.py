@@ -10,14 +10,14 @@ from fastapi.testclient import TestClient
 from openapi_spec_validator import validate
 
 from service.app import create_app
-from service.cases.notification import EXAMPLE_NOTIFICATIONS
+from service.cases.examples import EXAMPLE_NOTIFICATIONS
 from service.settings import Settings
 from tests.support import ApiClient, assert_problem, summary
 
 
 def test_the_documented_result_example_is_a_valid_result() -> None:
     from service.cases.examples import EXAMPLE_CASE_RESULT, EXAMPLE_STORED_CASE
-    from service.cases.notification import CaseResult, StoredCase
+    from service.cases.result import CaseResult, StoredCase
 
     CaseResult.model_validate(EXAMPLE_CASE_RESULT)
     StoredCase.model_validate(EXAMPLE_STORED_CASE)

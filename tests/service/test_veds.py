@@ -17,14 +17,8 @@ from typing import Any
 import pytest
 
 from service.cases import service as cases_service
-from service.cases.veds import (
-    KM_PER_MILE,
-    MAX_DEPTH,
-    MAX_ELEMENTS,
-    VEDS_MEDIA_TYPE,
-    clock_to_pdof_deg,
-    delta_v_to_kmh,
-)
+from service.cases.veds import KM_PER_MILE, VEDS_MEDIA_TYPE, clock_to_pdof_deg, delta_v_to_kmh
+from service.cases.veds_xml import MAX_DEPTH, MAX_ELEMENTS
 from service.db.spool import Spool, SpoolEntry
 from tests.support import ApiClient, assert_problem, post_case, stored_case
 
