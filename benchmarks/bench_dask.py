@@ -5,7 +5,7 @@ and rewrites the "Dask" section of ``benchmarks/RESULTS.md``.
 
 ``triage --batch`` on N notifications (the documented examples at varied delta-V
 and PDOF), with 1 and then 2 worker processes: the built-in pool (the models
-loaded once in this process, the pool forked from it: ``service.cli.main._run_batch``)
+loaded once in this process, the pool forked from it: ``service.jobs.batch.run_batch``)
 against a ``dask.distributed`` `LocalCluster` on loopback (a scheduler and that many
 single-threaded worker processes, the models loaded once per worker by a warm-up
 run before timing; ``service.jobs.dask``). Steady throughput: model loading is
@@ -61,8 +61,8 @@ def main() -> None:
 
     from distributed import LocalCluster
 
-    from service.cli.main import _batch_record, _run_batch
     from service.context import engine_models_for
+    from service.jobs.batch import batch_record, run_batch
     from service.jobs.dask import triage_batch_on_dask
     from service.settings import get_settings
 
@@ -87,7 +87,7 @@ def main() -> None:
             def on_dask(src_path: Path, out: Path, address: str = address) -> None:
                 triage_batch_on_dask(
                     src_path, out, scheduler=address, settings=settings,
-                    record=_batch_record, resume=False,
+                    record=batch_record, resume=False,
                 )  # fmt: skip
 
             on_dask(warm, work / "warm-out.jsonl")  # every worker loads its models
@@ -96,7 +96,7 @@ def main() -> None:
                     out = work / f"{engine}-{workers}.jsonl"
                     t0 = time.perf_counter()
                     if engine == "pool":
-                        _run_batch(src, out, models, resume=False, workers=workers)
+                        run_batch(src, out, models, resume=False, workers=workers)
                     else:
                         on_dask(src, out)
                     elapsed = time.perf_counter() - t0
