@@ -83,6 +83,7 @@ def main() -> None:
 
     from service.app import create_app
     from service.auth import Role, create_api_key
+    from service.cases import service as cases_service
     from service.pages import views as report
     from service.settings import Settings
 
@@ -101,7 +102,7 @@ def main() -> None:
                 r = client.post("/v1/cases", json=body, headers=headers)
                 assert r.status_code == 201, r.text
                 case_id = r.json()["case_id"]
-                record = report.load_case_record(ctx.sessions, case_id)
+                record = cases_service.load_case_record(ctx.sessions, case_id)
                 assert record is not None
                 html = report.case_page(record, now=datetime.now(UTC), chrome=chrome)  # warm
                 render_ms = []

@@ -20,6 +20,7 @@ from typing import Any
 
 from sqlalchemy.exc import DBAPIError, IntegrityError
 from sqlalchemy.exc import TimeoutError as PoolTimeoutError
+from sqlalchemy.orm import Session, sessionmaker
 
 from models.assumptions import Assumption
 from models.pulse import PulseError
@@ -29,6 +30,7 @@ from service.cases.notification import CrashNotificationIn, ReceivedSource
 from service.cases.result import CaseList, CaseResult, CaseSummary, StoredCase, to_case_result
 from service.context import ServiceContext
 from service.db import repository
+from service.db.repository import CaseRecord
 from service.db.spool import SpoolEntry, SpoolError
 from service.db.tables import Case, CaseOccupant, IdempotencyRecord
 from service.problems import (
@@ -40,9 +42,8 @@ from service.problems import (
     UnprocessableNotification,
 )
 
-log = logging.getLogger("aacn_triage")
-
 __all__ = [
+    "load_case_record",
     "STORE_ERRORS",
     "InvalidCursor",
     "SubmitOutcome",
@@ -462,6 +463,12 @@ def get_case(ctx: ServiceContext, case_id: str) -> StoredCase:
         if case is None:
             raise NotFound(f"No case with id {case_id!r}.")
         return _stored(case)
+
+
+def load_case_record(sessions: sessionmaker[Session], case_id: str) -> CaseRecord | None:
+    """The stored case as plain documents, or None (one read, no engine): the pages' source."""
+    with sessions() as session:
+        return repository.case_record(session, case_id)
 
 
 def encode_cursor(received_at: datetime, case_id: str) -> str:

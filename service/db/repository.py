@@ -2,9 +2,10 @@
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from datetime import datetime
+from typing import Any
 
 from sqlalchemy import and_, exists, or_, select, text, update
 from sqlalchemy.orm import Session, selectinload
@@ -13,8 +14,10 @@ from service.db.tables import ApiKey, Case, CaseOccupant, HealthProbe, Idempoten
 
 __all__ = [
     "CaseFilters",
+    "CaseRecord",
     "add_api_key",
     "add_case",
+    "case_record",
     "find_active_key",
     "get_active_key_by_id",
     "get_api_key",
@@ -180,3 +183,44 @@ def list_cases(
         )
     stmt = stmt.order_by(Case.received_at.desc(), Case.id.desc()).limit(limit)
     return session.scalars(stmt).all()
+
+
+@dataclass(frozen=True)
+class CaseRecord:
+    """A stored case as read from the audit store (plain JSON documents)."""
+
+    case_id: str
+    event_id: str
+    client_name: str
+    received_at: datetime
+    stored_at: datetime
+    request_sha256: str
+    engine_version: str
+    notification: Mapping[str, Any]
+    result: Mapping[str, Any]
+    models: Mapping[str, Any]
+    #: ``json`` or ``veds``: how the notification came in
+    source_format: str = "json"
+    #: for VEDS: the mapping record (version, vehicle, mapped, assumed, ignored)
+    source_mapping: Mapping[str, Any] | None = None
+
+
+def case_record(session: Session, case_id: str) -> CaseRecord | None:
+    """The stored case as plain documents, or None (one read)."""
+    case = get_case(session, case_id)
+    if case is None:
+        return None
+    return CaseRecord(
+        case_id=case.id,
+        event_id=case.event_id,
+        client_name=case.client_name,
+        received_at=case.received_at,
+        stored_at=case.stored_at,
+        request_sha256=case.request_sha256,
+        engine_version=case.engine_version,
+        notification=case.notification,
+        result=case.result,
+        models=case.models,
+        source_format=case.source_format,
+        source_mapping=case.source_mapping,
+    )

@@ -23,9 +23,9 @@ from fastapi import APIRouter, Request
 from fastapi.concurrency import run_in_threadpool
 from fastapi.responses import HTMLResponse, RedirectResponse, Response
 
+from models.impact_mode import ImpactMode
 from service.auth import Caller, Role, caller_for_key, caller_for_key_id
 from service.cases import service as cases_service
-from service.cases.endpoints import ImpactModeFilter
 from service.context import ServiceContext
 from service.db.repository import CaseFilters
 from service.deps import ContextDep
@@ -197,7 +197,7 @@ def case_report(case_id: str, request: Request, ctx: ContextDep) -> Response:
     gate = _gate(request, ctx)
     if isinstance(gate, Response):
         return gate
-    record = report.load_case_record(ctx.sessions, case_id) if len(case_id) <= 64 else None
+    record = cases_service.load_case_record(ctx.sessions, case_id) if len(case_id) <= 64 else None
     if record is None:
         return _error_page(
             request, 404, "Not found", f"No case with id {case_id!r}.", signed_in=True
@@ -249,7 +249,7 @@ def case_list(request: Request, ctx: ContextDep) -> Response:
     next_url = ""
     try:
         impact = echo["impact_mode"].strip()
-        if impact and impact not in {m.value for m in ImpactModeFilter}:
+        if impact and impact not in {m.value for m in ImpactMode}:
             raise ValueError(f"Unknown impact mode {impact!r}.")
         limit_text = echo["limit"].strip()
         if limit_text and not (limit_text.isdigit() and int(limit_text) >= 1):
@@ -275,7 +275,7 @@ def case_list(request: Request, ctx: ContextDep) -> Response:
         "cases.html",
         rows=rows,
         filters=echo,
-        impact_modes=[m.value for m in ImpactModeFilter],
+        impact_modes=[m.value for m in ImpactMode],
         max_limit=settings.page_max_limit,
         message=message,
         next_url=next_url,

@@ -23,7 +23,6 @@ from typing import Any
 from urllib.parse import urlencode
 
 from jinja2 import Environment, FileSystemLoader, StrictUndefined, select_autoescape
-from sqlalchemy.orm import Session, sessionmaker
 
 from models.injury.criteria import (
     FMVSS208_CHEST_A3MS_LIMIT_G,
@@ -38,7 +37,7 @@ from models.injury.risk import (
     VC_TOLERANCE_VIANO_1989_CHEST,
 )
 from models.notification import Body
-from service.db import repository
+from service.db.repository import CaseRecord
 from service.pages.drawing import (
     BODY_REGIONS,
     Bar,
@@ -51,7 +50,6 @@ from service.pages.drawing import (
 
 __all__ = [
     "AuditView",
-    "CaseRecord",
     "CaseView",
     "Limit",
     "ListRow",
@@ -248,26 +246,6 @@ def elapsed_text(seconds: float) -> str:
 
 
 # ------------------------------------------------------------------ view models
-
-
-@dataclass(frozen=True)
-class CaseRecord:
-    """A stored case as read from the audit store (plain JSON documents)."""
-
-    case_id: str
-    event_id: str
-    client_name: str
-    received_at: datetime
-    stored_at: datetime
-    request_sha256: str
-    engine_version: str
-    notification: Mapping[str, Any]
-    result: Mapping[str, Any]
-    models: Mapping[str, Any]
-    #: ``json`` or ``veds``: how the notification came in
-    source_format: str = "json"
-    #: for VEDS: the mapping record (version, vehicle, mapped, assumed, ignored)
-    source_mapping: Mapping[str, Any] | None = None
 
 
 @dataclass(frozen=True)
@@ -793,31 +771,6 @@ def query_string(params: Mapping[str, str | None]) -> str:
     """``?a=1&b=2`` of the non-empty parameters, or empty."""
     kept = {k: v for k, v in params.items() if v not in (None, "")}
     return "?" + urlencode(kept) if kept else ""
-
-
-# ------------------------------------------------------------------ use cases
-
-
-def load_case_record(sessions: sessionmaker[Session], case_id: str) -> CaseRecord | None:
-    """The stored case as plain documents, or None (one read, no engine)."""
-    with sessions() as session:
-        case = repository.get_case(session, case_id)
-        if case is None:
-            return None
-        return CaseRecord(
-            case_id=case.id,
-            event_id=case.event_id,
-            client_name=case.client_name,
-            received_at=case.received_at,
-            stored_at=case.stored_at,
-            request_sha256=case.request_sha256,
-            engine_version=case.engine_version,
-            notification=case.notification,
-            result=case.result,
-            models=case.models,
-            source_format=case.source_format,
-            source_mapping=case.source_mapping,
-        )
 
 
 def case_page(record: CaseRecord, *, now: datetime, chrome: Mapping[str, Any]) -> str:

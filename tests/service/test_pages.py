@@ -15,6 +15,7 @@ from fastapi.testclient import TestClient
 
 from models.injury import criteria, risk
 from models.notification import Body
+from service.cases import service as cases_service
 from service.db import repository
 from service.db.tables import ApiKey, Case
 from service.pages import views as report
@@ -602,7 +603,7 @@ def test_the_largest_pulse_renders_well_under_200_ms(api: ApiClient) -> None:
             },
         }
         case.notification = notification
-    record = report.load_case_record(sessions, case_id)
+    record = cases_service.load_case_record(sessions, case_id)
     assert record is not None
     chrome = {"root": "", "signed_in": True, "logout_token": ""}
     report.case_page(record, now=datetime.now(UTC), chrome=chrome)
