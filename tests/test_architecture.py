@@ -1,5 +1,11 @@
 """The house: one-way imports, no cycles, a request path without the offline tools.
 
+The service's features (``docs/layout.md``): ``service/cases`` (the request path)
+imports none of ``service/pages``, ``service/jobs`` or ``service/cli``; only
+``service/cli/research.py`` and ``service/jobs`` import the offline tools; no module
+but the app factory imports a router; one enum of impact modes; small modules and
+functions.
+
 The import graph is read from the source (every ``import`` and ``from ...
 import``, at module level or inside functions, so an import hidden in a
 function counts). Rules: the engine (``models``) never imports the service;
@@ -20,6 +26,12 @@ from pathlib import Path
 from tests.paths import ROOT
 
 PACKAGES = ("models", "service")
+#: Modules that define HTTP routes: only the app factory mounts them.
+ROUTERS = ("service.cases.endpoints", "service.pages.endpoints", "service.health")
+#: Longest module (lines) in service/ and models/triage/, longest function (lines) in
+#: service/ and models/ (the house's standards).
+MAX_MODULE_LINES = 800
+MAX_FUNCTION_LINES = 150
 
 
 def _module_name(path: Path) -> str:
@@ -130,8 +142,8 @@ def test_no_module_of_the_house_imports_in_a_circle() -> None:
 def test_the_graph_sees_imports_hidden_in_functions() -> None:
     """The check can fail: a function-level import is an edge like any other."""
     graph = import_graph()
-    # service.cli.main imports the evaluation only inside the `evaluate` command
-    assert "models.offline.field.evaluate" in graph["service.cli.main"]
+    # service.cli.research imports the evaluation only inside the `evaluate` command
+    assert "models.offline.field.evaluate" in graph["service.cli.research"]
     assert "models.triage" in graph["service.cases.service"]
 
 
@@ -173,3 +185,108 @@ def test_the_request_path_imports_no_offline_tool(tmp_path: Path) -> None:
     assert not offline, offline
     assert not heavy, sorted({m.split(".")[0] for m in heavy})
     assert "models.triage" in loaded, "the check ran the engine"
+    batch = [m for m in loaded if m.startswith(("service.jobs", "service.cli"))]
+    assert not batch, batch
+
+
+def _in(module: str, package: str) -> bool:
+    return module == package or module.startswith(package + ".")
+
+
+def test_only_the_research_commands_and_the_jobs_import_the_offline_tools() -> None:
+    bad = {
+        (m, d)
+        for m, deps in import_graph().items()
+        if _in(m, "service") and not (m == "service.cli.research" or _in(m, "service.jobs"))
+        for d in deps
+        if _is_offline(d)
+    }
+    assert not bad, sorted(bad)
+
+
+def test_the_cases_import_neither_the_pages_the_jobs_nor_the_command_line() -> None:
+    bad = {
+        (m, d)
+        for m, deps in import_graph().items()
+        if _in(m, "service.cases")
+        for d in deps
+        if any(_in(d, p) for p in ("service.pages", "service.jobs", "service.cli"))
+    }
+    assert not bad, sorted(bad)
+
+
+def test_the_jobs_and_the_command_line_stay_off_the_request_path() -> None:
+    """Only the command line (and the jobs themselves) import the jobs; nothing outside
+    the command line imports it."""
+    bad = {
+        (m, d)
+        for m, deps in import_graph().items()
+        for d in deps
+        if (_in(d, "service.jobs") and not (_in(m, "service.cli") or _in(m, "service.jobs")))
+        or (_in(d, "service.cli") and not _in(m, "service.cli"))
+    }
+    assert not bad, sorted(bad)
+
+
+def test_no_module_but_the_app_imports_a_router() -> None:
+    graph = import_graph()
+    bad = {(m, d) for m, deps in graph.items() if m != "service.app" for d in deps if d in ROUTERS}
+    assert not bad, sorted(bad)
+    assert all(r in graph["service.app"] for r in ROUTERS), "the check sees the routers"
+
+
+def _string_enums() -> dict[str, frozenset[str]]:
+    """Every Enum class of the house with its string member values, by qualified name."""
+    out = {}
+    for module, path in _modules().items():
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if not isinstance(node, ast.ClassDef):
+                continue
+            bases = {
+                b.id if isinstance(b, ast.Name) else getattr(b, "attr", "") for b in node.bases
+            }
+            if not bases & {"Enum", "StrEnum"}:
+                continue
+            out[f"{module}.{node.name}"] = frozenset(
+                s.value.value
+                for s in node.body
+                if isinstance(s, ast.Assign)
+                and isinstance(s.value, ast.Constant)
+                and isinstance(s.value.value, str)
+            )
+    return out
+
+
+def test_one_enum_for_the_impact_modes() -> None:
+    """The impact modes are spelled once (models.impact_mode.ImpactMode); the API's
+    query-parameter type is derived from it, not a second list. (The field data's
+    crash mode, models.field.features.FieldMode, is another thing: it has rollover.)"""
+    from models.impact_mode import ImpactMode
+    from service.cases.endpoints import ImpactModeFilter
+
+    modes = frozenset(m.value for m in ImpactMode)
+    spelled = sorted(name for name, values in _string_enums().items() if values == modes)
+    assert spelled == ["models.impact_mode.ImpactMode"]
+    assert [m.value for m in ImpactModeFilter] == [m.value for m in ImpactMode]
+
+
+def test_no_module_is_too_long() -> None:
+    long = {
+        str(path.relative_to(ROOT)): n
+        for module, path in _modules().items()
+        if _in(module, "service") or _in(module, "models.triage")
+        if (n := len(path.read_text(encoding="utf-8").splitlines())) > MAX_MODULE_LINES
+    }
+    assert not long, long
+
+
+def test_no_function_is_too_long() -> None:
+    long = {}
+    for module, path in _modules().items():
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef):
+                assert node.end_lineno is not None
+                first = min([d.lineno for d in node.decorator_list] + [node.lineno])
+                if node.end_lineno - first + 1 > MAX_FUNCTION_LINES:
+                    long[f"{module}.{node.name}"] = node.end_lineno - first + 1
+    assert not long, long

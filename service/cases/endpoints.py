@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from datetime import UTC, datetime
 from enum import StrEnum
-from typing import Annotated, Any
+from typing import TYPE_CHECKING, Annotated, Any
 
 from fastapi import APIRouter, Path, Query, Request
 from fastapi.concurrency import run_in_threadpool
@@ -12,6 +12,7 @@ from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
 from pydantic import ValidationError
 
+from models.impact_mode import ImpactMode
 from service.auth import require_auditor, require_submitter
 from service.cases import service as cases_service
 from service.cases.notification import CrashNotificationIn, ReceivedSource, Rfc3339Text
@@ -39,13 +40,14 @@ def _problems(*statuses: int) -> dict[int | str, dict[str, Any]]:
     }
 
 
-class ImpactModeFilter(StrEnum):
-    """Impact mode of at least one occupant of the case."""
-
-    frontal = "frontal"
-    rear = "rear"
-    near_side = "near_side"
-    far_side = "far_side"
+if TYPE_CHECKING:
+    ImpactModeFilter = ImpactMode
+else:
+    #: The `impact_mode` query parameter's type: the values of
+    #: `models.impact_mode.ImpactMode` (the one spelling of the modes), under the name
+    #: the OpenAPI document gives it (its schema `ImpactModeFilter`).
+    ImpactModeFilter = StrEnum("ImpactModeFilter", {m.value: m.value for m in ImpactMode})
+    ImpactModeFilter.__doc__ = "Impact mode of at least one occupant of the case."
 
 
 CaseId = Annotated[str, Path(description="Case id (UUID).", max_length=64)]
