@@ -337,3 +337,13 @@ def test_the_triage_code_checksum_covers_the_whole_package() -> None:
     assert len(set(TRIAGE_SOURCES)) == len(TRIAGE_SOURCES)
     for rel in TRIAGE_SOURCES:
         assert (root / rel).is_file(), rel
+
+
+def test_the_package_has_one_face() -> None:
+    """Every public name of models.triage is importable from the package itself."""
+    import models.triage as face
+
+    missing = [name for name in face.__all__ if not hasattr(face, name)]
+    assert not missing
+    assert face.triage.__module__ == "models.triage.run"
+    assert face.simulate_notification.__module__ == "models.triage.simulation"
