@@ -33,8 +33,16 @@ looks back 20 ms, the measured duration of a haversine of length ``T`` is a few
 ms longer than ``T``; the haversine fit gives ``T`` itself. A summary pulse is
 a haversine by definition and its duration is its ``T``.
 
-Delta-V is the resultant cumulative delta-V at the end of event (equal to the
-maximum for a pulse without rebound).
+Delta-V is the *maximum* delta-V of 49 CFR 563: the largest resultant
+cumulative delta-V over the whole record (for a pulse without rebound, the one
+at the end of event; with a rebound or a second impact, the largest). Its
+components and the PDOF are those of the delta-V vector at that moment.
+
+Plausibility
+------------
+A measured pulse that is not physical (a delta-V record implying more than the
+accepted acceleration, or a delta-V that swings back and forth beyond the noise)
+is refused, naming the field: :mod:`models.pulse_plausibility` holds the rule.
 
 Processing per kind
 -------------------
@@ -46,8 +54,8 @@ Processing per kind
   so the acceleration is piecewise constant, ``(v[k+1] - v[k]) / interval`` on
   each interval, and integrates back exactly to the record at every record
   sample. Not filtered: at 100 Hz there is nothing above CFC 60 to remove.
-  Delta-V comes from the record itself (``v(t_end) - v(0)``; ``v(0)`` is 0 in
-  a 563 record).
+  Delta-V comes from the record itself (``max |v(t) - v(0)|``; ``v(0)`` is 0
+  in a 563 record).
 * ``summary``: a haversine along the PDOF with ``A = 2 delta-V / (g T)``
   (from ``delta-V = A g T / 2``, ``occupant-lpm-notes.md`` section 3). ``T`` is the
   given ``duration_ms`` or, if absent, :data:`DEFAULT_HAVERSINE_DURATION_MS`.
@@ -78,6 +86,13 @@ from models.limits import (
     PULSE_CFC,
 )
 from models.notification import AccelerationPulse, DeltaVPulse, Pulse, SummaryPulse
+from models.pulse_plausibility import (
+    MAX_DELTA_V_REVERSALS,
+    check_implied_acceleration,
+    count_reversals,
+    reversal_band_kmh,
+)
+from models.pulse_plausibility import warm_up as _warm_up_plausibility
 
 __all__ = [
     "PulseError",
@@ -206,11 +221,12 @@ class ProcessedPulse:
     lateral_g : ndarray, shape (n,)
         y acceleration, g (positive to the right).
     delta_v_kmh : float
-        Magnitude of the resultant velocity change at the end of event, km/h.
+        Maximum delta-V: the largest magnitude of the resultant velocity change
+        over the record, km/h (49 CFR 563 "maximum delta-V").
     delta_v_longitudinal_kmh : float
-        x component of the velocity change, km/h.
+        x component of the velocity change at its maximum, km/h.
     delta_v_lateral_kmh : float
-        y component of the velocity change, km/h.
+        y component of the velocity change at its maximum, km/h.
     pdof_deg : float
         Principal direction of force, deg clockwise from straight ahead, in
         ``[0, 360)``: 0 frontal, 90 right, 180 rear, 270 left.
@@ -574,6 +590,32 @@ def _check_delta_v(name: str, dv_kmh: float) -> None:
         )
 
 
+def _check_implied_acceleration(vx: FloatArray, vy: FloatArray, dt: float) -> None:
+    """Refuse a delta-V record changing faster than the accepted acceleration."""
+    found = check_implied_acceleration(vx, vy, dt)
+    if found is not None:
+        name, k, accel_g = found
+        raise PulseError(
+            f"`{name}` is not a physical record: from element {k - 1} to {k} the delta-V "
+            f"changes at {accel_g:.4g} g, beyond the accepted {MAX_ABS_ACCELERATION_G:g} g."
+        )
+
+
+def _check_reversals(
+    name: str, dvx_kmh: FloatArray, dvy_kmh: FloatArray, max_dv_kmh: float, rate_hz: float
+) -> None:
+    """Refuse a delta-V that swings back and forth (:mod:`models.pulse_plausibility`)."""
+    band = reversal_band_kmh(max_dv_kmh)
+    for axis, series in ((name, dvx_kmh), (name.replace("longitudinal", "lateral"), dvy_kmh)):
+        count, first = count_reversals(series, band)
+        if count > MAX_DELTA_V_REVERSALS:
+            raise PulseError(
+                f"`{axis}` is not a physical record: its delta-V turns back {count} times by "
+                f"more than {band:.3g} km/h (the first at {first / rate_hz * 1e3:.4g} ms); a "
+                f"crash pulse turns at most {MAX_DELTA_V_REVERSALS} times."
+            )
+
+
 def _summarise(
     name: str,
     t: FloatArray,
@@ -593,9 +635,12 @@ def _summarise(
             f"than {EOE_DELTA_V_KMH} km/h within {EOE_WINDOW_S * 1e3:g} ms "
             "(49 CFR 563.5 time zero)."
         )
-    dvx, dvy = float(dvx_kmh[end]), float(dvy_kmh[end])
+    # 49 CFR 563 "maximum delta-V": the largest resultant change over the record
+    at_max = int(np.argmax(np.hypot(dvx_kmh, dvy_kmh)))
+    dvx, dvy = float(dvx_kmh[at_max]), float(dvy_kmh[at_max])
     dv = math.hypot(dvx, dvy)
     _check_delta_v(name, dv)
+    _check_reversals(name, dvx_kmh, dvy_kmh, dv, rate_hz)
     resultant = np.hypot(ax[: end + 1], ay[: end + 1])
     fit = _fit_haversine(t[: end + 1], resultant, dv)
     return ProcessedPulse(
@@ -661,6 +706,7 @@ def _process_delta_v(pulse: DeltaVPulse, rate_hz: float) -> ProcessedPulse:
         )
     dt = interval_ms / 1e3
     length = _check_record_duration("longitudinal_kmh", vx.size, dt)
+    _check_implied_acceleration(vx, vy, dt)
     t = _grid(length, rate_hz)
     # Piecewise-linear delta-V, piecewise-constant acceleration on [t_k, t_k+1).
     k = np.minimum(np.floor(t / dt + _GRID_EPS).astype(np.int64), vx.size - 2)
@@ -736,7 +782,8 @@ def process_pulse(pulse: Pulse, output_rate_hz: float = DEFAULT_OUTPUT_RATE_HZ) 
         too short (fewer than 3 samples or under 20 ms) or too long (over 5 s),
         a sample is beyond +/-2000 g or +/-200 km/h,
         the channels differ in length, a measured pulse holds no crash (563
-        time zero never reached) or the delta-V exceeds 200 km/h.
+        time zero never reached), the delta-V exceeds 200 km/h, or a measured
+        pulse is not physical (:mod:`models.pulse_plausibility`).
     TypeError
         If `pulse` is not one of the three pulse kinds.
 
@@ -768,3 +815,4 @@ def warm_up() -> None:
     phase, sin2 = _haversine_terms(np.pi * t, 0.01)
     _haversine_residual(t, sin2, sin2, 1.0, 0.01)
     _haversine_jacobian(t, phase, sin2, 1.0, 0.01)
+    _warm_up_plausibility()
