@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import logging
-import secrets
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 from pathlib import Path
@@ -13,7 +12,7 @@ from fastapi import FastAPI
 from fastapi.staticfiles import StaticFiles
 from starlette.responses import Response
 
-from service import __version__, health
+from service import __version__, health, session_secret
 from service.balance import ConnectionBalance, WorkerLoads
 from service.cases import endpoints as cases
 from service.cases import service as cases_service
@@ -47,14 +46,8 @@ class _StaticFiles(StaticFiles):
         return response
 
 
-def _session_secret(settings: Settings) -> bytes:
-    if settings.session_secret is not None:
-        return settings.session_secret.get_secret_value().encode("utf-8")
-    log.info(
-        "AACN_SESSION_SECRET is not set: browser sessions are signed with a random secret of "
-        "this process (they end at restart and are not shared between processes)"
-    )
-    return secrets.token_bytes(32)
+def _session_secret(settings: Settings) -> session_secret.SessionSecret:
+    return session_secret.load(settings)
 
 
 def create_app(settings: Settings | None = None) -> FastAPI:
@@ -81,6 +74,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         except Exception as exc:  # reported by /readyz, the service stays alive
             error = f"{type(exc).__name__}: {exc}"
             log.error("models failed to load: %s", error)
+        secret = _session_secret(settings)
         ctx = ServiceContext(
             settings=settings,
             db_engine=db_engine,
@@ -89,7 +83,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
             models=models,
             spool=Spool(settings.resolved_spool_path()),
             models_error=error,
-            session_secret=_session_secret(settings),
+            session_secret=secret.value,
+            session_secret_origin=secret.origin,
         )
         app.state.ctx = ctx
         replayer = SpoolReplayer(

@@ -90,6 +90,8 @@ class ServiceContext:
     models_error: str | None = None
     #: Signs the browser session cookies and CSRF tokens (``service.pages.session``).
     session_secret: bytes = b""
+    #: Where it came from (``service.session_secret.ORIGIN_*``), shown by /readyz.
+    session_secret_origin: str = ""
 
     #: API keys seen valid: hash -> (caller, monotonic time). Used only while the
     #: store cannot be read, so that spooling works through an outage.

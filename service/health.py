@@ -80,6 +80,8 @@ def readyz(ctx: ContextDep) -> JSONResponse:
             "status": "ready" if store_error is None else "degraded",
             "store": "writable" if store_error is None else f"not writable: {store_error}",
             "spool": {"pending": pending} if spool_error is None else f"failing: {spool_error}",
+            # configured, file, or process: replicas need the one configured secret
+            "session_secret": ctx.session_secret_origin,
             "models": {
                 name: {"version": m.version, "sha256": m.sha256}
                 for name, m in (ctx.models.model_infos().items() if ctx.models else [])

@@ -87,9 +87,16 @@ class Settings(BaseSettings):
         default=None,
         min_length=32,
         description="Secret (at least 32 characters) that signs the browser session cookies of "
-        "the case pages. None: a random one is generated at start, so sessions end when the "
-        "process restarts and are not shared between processes (set it when running several "
-        "workers or replicas).",
+        "the case pages. None: `session_secret_file`, else one generated at start and shared by "
+        "the workers of that start (sessions end when it stops). Set it when running several "
+        "replicas behind one load balancer: they must all sign with the same secret.",
+    )
+    session_secret_file: Path | None = Field(
+        default=None,
+        description="A file holding the session secret (at least 32 characters; e.g. a "
+        "container secret), read when `session_secret` is not set. `serve` with several "
+        "workers and neither sets it for its workers to a secret it generates at start "
+        "(`service.session_secret`).",
     )
     session_ttl_s: int = Field(
         default=900,

@@ -44,6 +44,10 @@ def cmd_serve(args: argparse.Namespace) -> int:
         # the workers' shared table of requests in flight (service.balance)
         loads_dir = tempfile.mkdtemp(prefix="aacn-serve-")
         os.environ[LOADS_ENV] = str(WorkerLoads.create(Path(loads_dir) / "loads"))
+        # one session secret for every worker of this start (service.session_secret)
+        from service.session_secret import share_with_workers
+
+        share_with_workers(settings, Path(loads_dir))
     try:
         _run_uvicorn(host, port, workers, settings)
     finally:
