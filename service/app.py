@@ -13,6 +13,7 @@ from fastapi.staticfiles import StaticFiles
 from starlette.responses import Response
 
 from service import __version__, health, session_secret
+from service.auth import caller_of_row
 from service.balance import ConnectionBalance, WorkerLoads
 from service.cases import endpoints as cases
 from service.cases import service as cases_service
@@ -20,6 +21,7 @@ from service.context import ServiceContext, engine_models_for
 from service.db import migrate
 from service.db.session import make_engine, make_sessionmaker
 from service.db.spool import Spool, SpoolReplayer
+from service.key_cache import KeyRefresher
 from service.metrics import Metrics, metrics_middleware
 from service.middleware import BodySizeLimit, ResponseHeaders
 from service.openapi import document_validation_problems, install_offline_docs, operation_id
@@ -94,6 +96,11 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         )
         app.state.replayer = replayer
         replayer.start()
+        # revocations reach this process while the store is up (service.key_cache)
+        keys = KeyRefresher(
+            ctx.key_states, ctx.sessions, caller_of_row, settings.key_refresh_interval_s
+        )
+        keys.start()
         if loads is not None:
             loads.claim()  # counted among the workers once it serves
         try:
@@ -102,6 +109,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
             if loads is not None:
                 loads.close()
             replayer.stop()
+            keys.stop()
             db_engine.dispose()
 
     app = FastAPI(

@@ -6,19 +6,19 @@ lookup is by hash, so no secret is ever compared in Python.
 
 Every request reads its key from the store, so a revoked or rotated key is refused
 at once. Only while the store cannot be read (an outage, when cases go to the
-spool) are keys accepted from the keys this process saw valid within
-`KEY_CACHE_MAX_AGE_S`.
+spool) is a key judged by what this process last knew of it: revoked keys are
+refused, keys known active within `KEY_CACHE_MAX_AGE_S` accepted, others unknown
+(503); the key table is re-read every `key_refresh_interval_s` (`service.key_cache`).
 """
 
 from __future__ import annotations
 
 import hashlib
 import secrets
-import time
 from dataclasses import dataclass
 from datetime import UTC, datetime
 from enum import StrEnum
-from typing import Annotated
+from typing import Annotated, Any
 
 from fastapi import Depends, Request
 from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
@@ -28,13 +28,16 @@ from sqlalchemy.orm import Session, sessionmaker
 
 from service.db import repository
 from service.db.tables import ApiKey
+from service.key_cache import KEY_CACHE_MAX_AGE_S, KeyStates, Verdict
 from service.problems import Forbidden, StoreUnavailable, Unauthorized
 
 __all__ = [
     "KEY_PREFIX",
     "Caller",
     "Role",
+    "KEY_CACHE_MAX_AGE_S",
     "caller_for_key",
+    "caller_of_row",
     "caller_for_key_id",
     "create_api_key",
     "hash_key",
@@ -49,10 +52,6 @@ __all__ = [
 KEY_PREFIX = "aacn_"
 #: Random bytes in a key (256 bits).
 KEY_BYTES = 32
-#: Seconds a key seen valid is still accepted while the store cannot be read.
-#: [R] Long enough to ride out a database maintenance window; a revocation made
-#: during an outage cannot be read anyway, and is enforced once the store returns.
-KEY_CACHE_MAX_AGE_S = 24 * 3600.0
 
 
 class Role(StrEnum):
@@ -165,21 +164,29 @@ def _authenticate(
         raise Unauthorized("Send an API key as `Authorization: Bearer <key>`.")
     ctx = request.app.state.ctx
     digest = hash_key(credentials.credentials)
-    cache: dict[str, tuple[Caller, float]] = ctx.key_cache
+    states: KeyStates = ctx.key_states
     try:
         with ctx.sessions() as session:
             row = repository.find_active_key(session, digest)
     except (DBAPIError, PoolTimeoutError) as exc:
-        seen = cache.get(digest)
-        if seen is not None and time.monotonic() - seen[1] <= KEY_CACHE_MAX_AGE_S:
-            return seen[0]
+        # the outage rule (service.key_cache)
+        verdict, known = states.verdict(digest)
+        if verdict is Verdict.ACTIVE and isinstance(known, Caller):
+            return known
+        if verdict is Verdict.REVOKED:
+            raise Unauthorized("The API key is unknown or revoked.") from exc
         raise StoreUnavailable("The key store is unavailable; retry later.") from exc
     if row is None:
-        cache.pop(digest, None)
+        states.seen_refused(digest)
         raise Unauthorized("The API key is unknown or revoked.")
-    caller = Caller(key_id=row.id, name=row.name, role=Role(row.role))
-    cache[digest] = (caller, time.monotonic())
+    caller = caller_of_row(row)
+    states.seen_active(digest, caller)
     return caller
+
+
+def caller_of_row(row: Any) -> Caller:
+    """The caller of a key row (anything with ``id``, ``name`` and ``role``)."""
+    return Caller(key_id=row.id, name=row.name, role=Role(row.role))
 
 
 def _check_role(caller: Caller, allowed: frozenset[Role]) -> Caller:

@@ -6,7 +6,6 @@ import logging
 import threading
 import time
 from dataclasses import dataclass, field
-from typing import Any
 
 from sqlalchemy import Engine
 from sqlalchemy.orm import Session, sessionmaker
@@ -14,6 +13,7 @@ from sqlalchemy.orm import Session, sessionmaker
 from models.field.model import WITHDRAWN_VERSIONS
 from models.triage import EngineModels, load_engine_models
 from service.db.spool import Spool
+from service.key_cache import KeyStates
 from service.metrics import Metrics
 from service.settings import Settings
 
@@ -93,9 +93,9 @@ class ServiceContext:
     #: Where it came from (``service.session_secret.ORIGIN_*``), shown by /readyz.
     session_secret_origin: str = ""
 
-    #: API keys seen valid: hash -> (caller, monotonic time). Used only while the
-    #: store cannot be read, so that spooling works through an outage.
-    key_cache: dict[str, tuple[Any, float]] = field(default_factory=dict)
+    #: What this process knows of the API keys (``service.key_cache``). Used only
+    #: while the store cannot be read, so that spooling works through an outage.
+    key_states: KeyStates = field(default_factory=KeyStates)
     _last_reset: float = 0.0
     _reset_lock: threading.Lock = field(default_factory=threading.Lock)
 

@@ -144,6 +144,13 @@ class Settings(BaseSettings):
         description="/readyz answers 200 (status `degraded`) while the store is unwritable but "
         "the spool records cases, so a load balancer keeps sending notifications; false: 503.",
     )
+    key_refresh_interval_s: float = Field(
+        default=5.0,
+        gt=0.0,
+        description="Seconds between two reads of the API key table by each process, so that "
+        "a revocation reaches it while the store is up and is enforced during a later "
+        "outage too (`service.key_cache`).",
+    )
     metrics_access: Literal["open", "key"] = Field(
         default="open",
         description="`/metrics` open to anyone who reaches it, or only with an API key of "
