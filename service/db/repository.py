@@ -7,10 +7,17 @@ from dataclasses import dataclass
 from datetime import datetime
 from typing import Any
 
-from sqlalchemy import and_, exists, or_, select, text, update
+from sqlalchemy import and_, delete, exists, or_, select, text, update
 from sqlalchemy.orm import Session, selectinload
 
-from service.db.tables import ApiKey, Case, CaseOccupant, HealthProbe, IdempotencyRecord
+from service.db.tables import (
+    ApiKey,
+    Case,
+    CaseOccupant,
+    EndedSession,
+    HealthProbe,
+    IdempotencyRecord,
+)
 
 __all__ = [
     "CaseFilters",
@@ -18,12 +25,14 @@ __all__ = [
     "add_api_key",
     "add_case",
     "case_record",
+    "end_browser_session",
     "find_active_key",
     "get_active_key_by_id",
     "get_api_key",
     "get_api_key_by_name",
     "get_case",
     "get_idempotency_record",
+    "is_browser_session_ended",
     "list_api_keys",
     "list_cases",
     "ping",
@@ -224,3 +233,20 @@ def case_record(session: Session, case_id: str) -> CaseRecord | None:
         source_format=case.source_format,
         source_mapping=case.source_mapping,
     )
+
+
+# ---------------------------------------------------------- browser sessions
+
+
+def end_browser_session(
+    session: Session, session_sha256: str, expires_at: datetime, now: datetime
+) -> None:
+    """Record a signed-out session (idempotent) and drop those past their expiry."""
+    session.execute(delete(EndedSession).where(EndedSession.expires_at <= now))
+    if session.get(EndedSession, session_sha256) is None:
+        session.add(EndedSession(session_sha256=session_sha256, expires_at=expires_at))
+    session.flush()
+
+
+def is_browser_session_ended(session: Session, session_sha256: str) -> bool:
+    return session.get(EndedSession, session_sha256) is not None

@@ -28,6 +28,7 @@ __all__ = [
     "Base",
     "Case",
     "CaseOccupant",
+    "EndedSession",
     "HealthProbe",
     "IdempotencyRecord",
     "UTCDateTime",
@@ -156,3 +157,16 @@ class HealthProbe(Base):
 
     id: Mapped[int] = mapped_column(Integer, primary_key=True, autoincrement=False)
     checked_at: Mapped[datetime]
+
+
+class EndedSession(Base):
+    """A browser session ended by its sign-out (``service.pages.session_end``).
+
+    Its cookie is refused until it would have expired; then the row may go.
+    """
+
+    __tablename__ = "ended_sessions"
+
+    #: SHA-256 of the session's nonce (the cookie's "n").
+    session_sha256: Mapped[str] = mapped_column(String(64), primary_key=True)
+    expires_at: Mapped[datetime] = mapped_column(index=True)

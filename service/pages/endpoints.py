@@ -22,6 +22,8 @@ from urllib.parse import parse_qs, quote
 from fastapi import APIRouter, Request
 from fastapi.concurrency import run_in_threadpool
 from fastapi.responses import HTMLResponse, RedirectResponse, Response
+from sqlalchemy.exc import DBAPIError
+from sqlalchemy.exc import TimeoutError as PoolTimeoutError
 
 from models.impact_mode import ImpactMode
 from service.auth import Caller, Role, caller_for_key, caller_for_key_id
@@ -45,6 +47,7 @@ from service.pages.session import (
     set_login_csrf_cookie,
     set_session_cookie,
 )
+from service.pages.session_end import end_session, session_has_ended
 from service.problems import UnprocessableNotification
 
 __all__ = ["CONTENT_SECURITY_POLICY", "router"]
@@ -156,7 +159,7 @@ def _identify(request: Request, ctx: ServiceContext) -> tuple[Caller | None, Bro
             return caller_for_key(ctx.sessions, key.strip()), None
         return None, None
     session = read_session(ctx.session_secret, request.cookies.get(SESSION_COOKIE), now=time.time())
-    if session is None:
+    if session is None or session_has_ended(ctx.sessions, session):
         return None, None
     caller = caller_for_key_id(ctx.sessions, session.key_id)
     return caller, session if caller is not None else None
@@ -354,7 +357,7 @@ async def login(request: Request, ctx: ContextDep) -> Response:
 
 @router.post("/v1/session/logout", response_class=HTMLResponse)
 async def logout(request: Request, ctx: ContextDep) -> Response:
-    """Sign out: the session cookie is cleared."""
+    """Sign out: the session is ended on the server (``session_end``) and its cookie cleared."""
     form = await _form(request)
     session = read_session(ctx.session_secret, request.cookies.get(SESSION_COOKIE), now=time.time())
     token = form.get("csrf_token", "")
@@ -363,10 +366,23 @@ async def logout(request: Request, ctx: ContextDep) -> Response:
         and not hmac.compare_digest(token, logout_token(ctx.session_secret, session))
     ):
         return _error_page(request, 403, "Refused", "This sign-out did not come from this service.")
-    response = RedirectResponse(
+    response: Response = RedirectResponse(
         f"{_root(request)}/v1/session?next=" + quote(f"{_root(request)}/v1/reports"),
         status_code=303,
     )
+    if session is not None:
+        try:  # the cookie is refused from now on, also if a copy of it was kept
+            await run_in_threadpool(end_session, ctx.sessions, session)
+        except (DBAPIError, PoolTimeoutError):
+            response = _error_page(
+                request,
+                503,
+                "Sign-out not recorded",
+                "The store is unavailable: the session cookie is cleared in this browser, but "
+                "the session stays valid until "
+                + datetime.fromtimestamp(session.expires_at, UTC).strftime("%H:%M UTC")
+                + ". Sign out again when the service is back.",
+            )
     response.headers.update(_SECURITY_HEADERS)
     clear_session_cookie(response)
     return response
