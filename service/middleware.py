@@ -11,6 +11,7 @@ from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from service.logs import request_id
 from service.problems import problem_response
+from service.security_headers import HSTS_VALUE
 
 __all__ = ["BodySizeLimit", "ResponseHeaders"]
 
@@ -92,7 +93,8 @@ class ResponseHeaders:
 
     ``X-Request-ID`` (the client's when it sends a plausible one, else a new UUID)
     is echoed and set for the logs; ``X-Content-Type-Options: nosniff`` always;
-    ``Cache-Control: no-store`` on case data (``/v1/``); no ``Server`` banner.
+    ``Cache-Control: no-store`` on case data (``/v1/``); HSTS on requests that came
+    over TLS (``service.security_headers``); no ``Server`` banner.
     """
 
     def __init__(self, app: ASGIApp) -> None:
@@ -106,6 +108,7 @@ class ResponseHeaders:
         rid = given if _REQUEST_ID.match(given) else uuid.uuid4().hex
         token = request_id.set(rid)
         case_data = str(scope.get("path", "")).startswith("/v1/")
+        over_tls = scope.get("scheme") == "https"  # TLS ends here (service.security_headers)
 
         async def send_with_headers(message: Message) -> None:
             if message["type"] == "http.response.start":
@@ -114,6 +117,8 @@ class ResponseHeaders:
                 headers["X-Content-Type-Options"] = "nosniff"
                 if case_data:
                     headers["Cache-Control"] = "no-store"
+                if over_tls:
+                    headers["Strict-Transport-Security"] = HSTS_VALUE
                 if "server" in headers:
                     del headers["server"]
             await send(message)

@@ -18,6 +18,7 @@ from service.cases.examples import EXAMPLE_NOTIFICATIONS, EXAMPLE_VEDS
 from service.cases.notification import CrashNotificationIn
 from service.cases.veds import VEDS_MEDIA_TYPE
 from service.problems import PROBLEM_MEDIA_TYPE
+from service.security_headers import secure_docs_page
 
 __all__ = [
     "operation_id",
@@ -117,10 +118,11 @@ def install_offline_docs(app: FastAPI) -> None:
     @app.get("/docs", include_in_schema=False)
     async def docs(request: Request) -> HTMLResponse:
         root = request.scope.get("root_path", "")
-        return get_swagger_ui_html(
+        page = get_swagger_ui_html(
             openapi_url=f"{root}/openapi.json",
             title="aacn-triage - API documentation",
             swagger_js_url=f"{root}/docs/static/swagger-ui-bundle.js",
             swagger_css_url=f"{root}/docs/static/swagger-ui.css",
             swagger_favicon_url=f"{root}/docs/static/favicon.png",
         )
+        return secure_docs_page(page)  # CSP (nonce), framing, referrer

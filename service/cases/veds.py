@@ -119,11 +119,16 @@ NOT_IN_VEDS: Final[tuple[tuple[str, AssumptionCode], ...]] = (
 )
 
 
-#: xsd:decimal's lexical form (no exponent, no underscores, no NaN).
-_DECIMAL = re.compile(r"^[+-]?(\d{1,12}(\.\d{0,12})?|\.\d{1,12})$")
+#: xsd:decimal's lexical form (no exponent, no underscores, no NaN), ASCII digits only
+#: (``\d`` would take any Unicode digit, ``٤٠`` or ``４０``). Any number of decimals: an
+#: exact KPH twin of an MPH value has six more than it; the length is capped below.
+_DECIMAL = re.compile(r"^[+-]?([0-9]{1,12}(\.[0-9]*)?|\.[0-9]+)$")
+#: Longest number text, characters. [R] Far beyond any sensor's precision (an MPH
+#: value with 12 decimals is 22 characters as KPH); bounds the decimal arithmetic.
+_MAX_DECIMAL_CHARS: Final = 64
 
 
-_SMALL_INT = re.compile(r"^\+?\d{1,3}$")
+_SMALL_INT = re.compile(r"^\+?[0-9]{1,3}$")
 
 
 _EVENT_ID = re.compile(r"^[\x21-\x7e]{1,128}$")
@@ -299,7 +304,7 @@ def _pulse(m: _Mapper, pulse: Element, path: str) -> _Pulse:
     measure = m.need(pulse, "veds:CrashPulseChangeInVelocityMeasure", path)
     value_text = m.need_text(measure, "nc:MeasurePointValue", measure_path)
     unit = m.need_text(measure, "nc:MeasureUnitText", measure_path)
-    if not _DECIMAL.match(value_text):
+    if len(value_text) > _MAX_DECIMAL_CHARS or not _DECIMAL.match(value_text):
         raise _refuse(
             f"{measure_path}/nc:MeasurePointValue",
             f"{value_text!r} is not a decimal number",
