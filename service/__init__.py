@@ -9,7 +9,8 @@ Layout, by feature (``docs/layout.md`` has the whole map)::
     middleware      body size limit, response headers;  openapi  the document's own parts
     settings        the one settings object (AACN_ prefix)
     context, deps   the loaded state of a process and its FastAPI dependency
-    auth            API keys: hashing, roles, dependencies
+    auth            API keys: hashing, roles, dependencies;  key_cache  keys in an outage
+    session_secret  the pages' signing secret;  security_headers  /docs policy, HSTS
     problems        RFC 9457 problem+json;  jsonbody  strict JSON bodies
     health          /livez, /readyz, /metrics (a router)
     logs, metrics   JSON logs with request ids; Prometheus metrics
@@ -18,7 +19,7 @@ Layout, by feature (``docs/layout.md`` has the whole map)::
                     (use cases), notification (wire in, to_engine), result (wire out),
                     veds and veds_xml (VEDS XML input), examples
     pages/          the dispatcher's pages: endpoints (router), views, drawing, session
-                    (sign-in cookie), templates/, static/
+                    (sign-in cookie), session_end (sign-out), templates/, static/
     db/             tables, session, migrate, repository (every query), spool (outages)
     jobs/           batch (local pool), dask, io, rescore: never on the request path
     cli/            the aacn-triage command: main, operate, research, common
