@@ -168,4 +168,7 @@ class KeyRefresher:
 
     def _run(self) -> None:
         while not self._stop.wait(self._interval_s):
-            self.refresh()
+            try:
+                self.refresh()
+            except Exception:  # never end the thread: the next interval tries again
+                log.exception("key table refresh failed")

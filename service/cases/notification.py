@@ -174,7 +174,13 @@ class AccelerationPulseIn(WireModel):
 
 
 class DeltaVPulseIn(WireModel):
-    """A 49 CFR 563 EDR record: cumulative delta-V at a fixed interval."""
+    """A 49 CFR 563 EDR record: cumulative delta-V at a fixed interval.
+
+    Decided on its maximum delta-V (the largest resultant over the record). A record
+    that is not physical is refused (422 naming the field): more than 500 g implied
+    between two samples, or a delta-V that turns back more than 3 times by more than
+    the noise (the larger of 2 km/h and 10 % of the maximum).
+    """
 
     kind: Literal["delta_v"] = Field(description="Pulse kind tag.")
     interval_ms: float = Field(
