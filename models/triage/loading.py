@@ -60,6 +60,7 @@ TRIAGE_SOURCES = (
     "triage/field_evidence.py",
     "triage/run.py",
     "pulse.py",
+    "pulse_plausibility.py",
     "impact_mode.py",
     "notification.py",
     "sensor_evidence.py",
