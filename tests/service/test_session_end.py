@@ -5,6 +5,7 @@ from __future__ import annotations
 from pathlib import Path
 from typing import Any
 
+import pytest
 from fastapi.testclient import TestClient
 from sqlalchemy import func, select
 
@@ -14,6 +15,7 @@ from service.db.tables import EndedSession
 from service.pages.session import SESSION_COOKIE
 from service.settings import Settings
 from tests.service.pages_support import Page, csrf_token
+from tests.service.test_store_outage import _database
 from tests.support import ApiClient
 
 
@@ -80,3 +82,28 @@ def test_a_session_ended_on_one_process_is_refused_by_another(tmp_path: Path) ->
         assert _replay(apps[1], value) == 401
         with ctx.sessions() as session:
             assert session.scalar(select(func.count()).select_from(EndedSession)) == 1
+
+
+@pytest.mark.postgres
+def test_a_sign_out_the_store_cannot_record_says_so(own_postgres: Any, tmp_path: Path) -> None:
+    url = _database(own_postgres.admin_url)
+    app = create_app(
+        Settings(database_url=url, spool_path=tmp_path / "spool.db", session_secret="s" * 40)
+    )
+    with TestClient(app):
+        _, key = create_api_key(app.state.ctx.sessions, name="aud", role=Role.AUDITOR)
+        browser = _browser(app)
+        _sign_in(browser, key)
+        token = Page(browser.get("/v1/reports").text).one("input", name="csrf_token")
+        own_postgres.pg_ctl("stop", "-m", "fast")
+        try:
+            r = browser.post("/v1/session/logout", data={"csrf_token": token.attrs["value"]})
+            assert r.status_code == 503, r.text[:300]
+            assert "Sign-out not recorded" in r.text
+            assert "stays valid until" in r.text
+            # the cookie is cleared in this browser all the same
+            cleared = [h for h in r.headers.get_list("set-cookie") if h.startswith(SESSION_COOKIE)]
+            assert cleared
+            assert "Max-Age=0" in cleared[0]
+        finally:
+            own_postgres.pg_ctl("start")
