@@ -24,6 +24,7 @@ from service.db.spool import Spool, SpoolReplayer
 from service.key_cache import KeyRefresher
 from service.metrics import Metrics, metrics_middleware
 from service.middleware import BodySizeLimit, ResponseHeaders
+from service.nemsis import endpoints as nemsis
 from service.openapi import document_validation_problems, install_offline_docs, operation_id
 from service.pages import endpoints as pages
 from service.problems import install_problem_handlers
@@ -142,6 +143,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         app.add_middleware(ConnectionBalance, loads=loads)
     app.include_router(health.router)
     app.include_router(cases.router)
+    app.include_router(nemsis.router)
     app.include_router(pages.router)
     app.mount("/static", _StaticFiles(directory=STATIC_DIR), name="static")
     return app

@@ -156,6 +156,26 @@ class Settings(BaseSettings):
         description="`/metrics` open to anyone who reaches it, or only with an API key of "
         "role metrics or admin.",
     )
+    # the EMS agency NEMSIS records are handed to (service/nemsis; a request may name another)
+    nemsis_agency_state_id: str | None = Field(
+        default=None,
+        min_length=1,
+        max_length=50,
+        pattern=r"^[\x20-\x7e]+$",
+        description="NEMSIS dAgency.01, the receiving EMS agency's unique state ID.",
+    )
+    nemsis_agency_number: str | None = Field(
+        default=None,
+        min_length=1,
+        max_length=15,
+        pattern=r"^[\x20-\x7e]+$",
+        description="NEMSIS dAgency.02 and eResponse.01, the receiving EMS agency's number.",
+    )
+    nemsis_agency_state: str | None = Field(
+        default=None,
+        pattern=r"^[0-9]{2}$",
+        description="NEMSIS dAgency.04, the two-digit ANSI code of the agency's state.",
+    )
 
     def resolved_spool_path(self) -> Path:
         """`spool_path`, or its default (see the field)."""

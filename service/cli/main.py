@@ -17,10 +17,11 @@ Commands::
     aacn-triage evaluate FILE [--labels LABELS] [--out DIR] [--operating-point NAME]
                          [--workers N | --scheduler tcp://HOST:8786]
     aacn-triage cases rescore --model VERSION [--out FILE.csv] [--operating-point NAME]
+    aacn-triage cases export --nemsis --out DIR [--since TIME] [--resume] [--agency-...]
 
 Layout: :mod:`service.cli.operate` (operator commands), :mod:`service.cli.research`
 (hand-overs to the offline tools), :mod:`service.cli.common` (shared helpers); batch
-work in :mod:`service.jobs`.
+work in :mod:`service.jobs`; ``cases export --nemsis`` in :mod:`service.nemsis.command`.
 """
 
 from __future__ import annotations
@@ -37,6 +38,7 @@ from service.cli.research import (
     cmd_handed_over,
     cmd_simulate,
 )
+from service.nemsis import command as nemsis_command
 
 __all__ = ["build_parser", "main"]
 
@@ -144,6 +146,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--operating-point", help="operating point (default AACN_OPERATING_POINT or the model's)"
     )
     cases.set_defaults(func=cmd_cases)
+    nemsis_command.add_parser(cases_sub)  # cases export --nemsis (service/nemsis/command.py)
 
     for command, (_, text) in HANDED_OVER.items():
         handed = sub.add_parser(command, help=text, add_help=False)

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 from datetime import datetime
 from typing import Any
 
-from sqlalchemy import and_, delete, exists, or_, select, text, update
+from sqlalchemy import and_, delete, exists, func, or_, select, text, update
 from sqlalchemy.orm import Session, selectinload
 
 from service.db.tables import (
@@ -25,6 +25,7 @@ __all__ = [
     "add_api_key",
     "add_case",
     "case_record",
+    "count_cases",
     "end_browser_session",
     "find_active_key",
     "get_active_key_by_id",
@@ -114,6 +115,14 @@ def add_case(session: Session, case: Case, record: IdempotencyRecord) -> None:
 
 def get_case(session: Session, case_id: str) -> Case | None:
     return session.get(Case, case_id)
+
+
+def count_cases(session: Session, *, received_from: datetime | None = None) -> int:
+    """Cases received at or after `received_from` (all: None), for a progress bar."""
+    stmt = select(func.count()).select_from(Case)
+    if received_from is not None:
+        stmt = stmt.where(Case.received_at >= received_from)
+    return int(session.scalar(stmt) or 0)
 
 
 def cases_oldest_first(

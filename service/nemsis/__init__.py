@@ -1,0 +1,9 @@
+"""NEMSIS v3.5.1: every stored case as an EMS patient care record (issue 40).
+
+- ``codes``: the NEMSIS code lists used and the element template of a report.
+- ``mapping``: a stored case -> an ``EMSDataSet`` document and its report.
+- ``validate``: validation against the shipped XSDs (``xsd/``, with their provenance).
+- ``service``: who may read which case's record; build and validate (the use case).
+- ``endpoints``: ``GET /v1/cases/{case_id}/nemsis``.
+- ``export``: ``aacn-triage cases export --nemsis`` (many cases to a directory).
+"""
