@@ -27,7 +27,12 @@ from tests.paths import ROOT
 
 PACKAGES = ("models", "service")
 #: Modules that define HTTP routes: only the app factory mounts them.
-ROUTERS = ("service.cases.endpoints", "service.pages.endpoints", "service.health")
+ROUTERS = (
+    "service.cases.endpoints",
+    "service.pages.endpoints",
+    "service.nemsis.endpoints",
+    "service.health",
+)
 #: Longest module (lines) in service/ and models/triage/, longest function (lines) in
 #: service/ and models/ (the house's standards).
 MAX_MODULE_LINES = 800
