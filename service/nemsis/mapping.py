@@ -34,11 +34,13 @@ from decimal import ROUND_HALF_UP, Decimal
 from typing import Any, Final
 
 from lxml import etree
+from pydantic import AwareDatetime, TypeAdapter, ValidationError
 
 from service import __version__
 from service.cases.result import StoredCase
 from service.nemsis import codes
 from service.nemsis.codes import NAMESPACE, NOT_RECORDED, Group, Kind, Leaf
+from service.nemsis.veds_source import VedsFacts, veds_facts
 
 __all__ = [
     "SCHEMA_LOCATION",
@@ -81,6 +83,7 @@ VEHICLE_TEXT_CHARS: Final = {"eInjury.16": (2, 100), "eInjury.18": (2, 100), "eI
 YEAR_RANGE: Final = (1900, 2050)
 #: Ages ePatient.15 takes (ePatient_v3.xsd ``Age``), in its unit.
 AGE_RANGE: Final = (1, 120)
+_AWARE: Final = TypeAdapter(AwareDatetime)
 _AGENCY_TEXT = re.compile(r"^[\x20-\x7e]+$")
 _STATE_CODE = re.compile(r"^[0-9]{2}$")
 
@@ -209,6 +212,7 @@ class _Facts:
 
     case: StoredCase
     unreported: frozenset[str]
+    veds: VedsFacts | None = None
     filled: list[tuple[int | None, str, str]] = field(default_factory=list)
     left_out: list[Omission] = field(default_factory=list)
 
@@ -220,7 +224,10 @@ class _Facts:
             for a in assumed
             if isinstance(a, Mapping) and a.get("code") in UNREPORTED_VEDS_CODES
         )
-        return cls(case=case, unreported=unreported)
+        document = case.source_document if case.source_format == "veds" else None
+        return cls(
+            case=case, unreported=unreported, veds=veds_facts(document) if document else None
+        )
 
     @property
     def notification(self) -> Mapping[str, Any]:
@@ -257,14 +264,14 @@ class _Facts:
 
 
 def _occurred_at(facts: _Facts) -> datetime | None:
+    """The crash time as the sender gave it (its own offset), parsed as the contract does."""
     text = facts.given("occurred_at")
     if not isinstance(text, str):
         return None
     try:
-        at = datetime.fromisoformat(text)
-    except ValueError:
+        return _AWARE.validate_python(text)
+    except ValidationError:
         return None
-    return at if at.tzinfo is not None else at.replace(tzinfo=UTC)
 
 
 def _airbags_deployed(facts: _Facts, i: int) -> bool | None:
@@ -345,6 +352,45 @@ def _seat_group(facts: _Facts, parent: etree._Element, i: int) -> None:
         facts.fill("eInjury.29", f"occupants[{i}].frontal_airbag, side_airbag", None)
 
 
+def _delta_velocities(facts: _Facts, group: etree._Element) -> None:
+    """eInjury.22: the triaged delta-V; every pulse of a VEDS document, in its order."""
+    triaged = facts.case.result.pulse.delta_v_kmh
+    pulses: tuple[float, ...] = (triaged,)
+    source = "result.pulse.delta_v_kmh (km/h, nearest integer)"
+    # a VEDS case's pulses, when the triaged one (the largest) is among them
+    if facts.veds is not None and facts.veds.delta_v_kmh and max(facts.veds.delta_v_kmh) == triaged:
+        pulses = facts.veds.delta_v_kmh
+        source = "source_document: each veds:VehicleCrashPulse in order (km/h, nearest integer)"
+    for ordinal, delta_v_kmh in enumerate(pulses, start=1):
+        _Writer.add(
+            group,
+            "eInjury.22",
+            str(_integer_kmh(delta_v_kmh)),
+            VelocityUnit=codes.VELOCITY_UNIT_KMH,
+            DeltaVelocityOrdinal=str(ordinal),
+        )
+    facts.fill("eInjury.22", source)
+
+
+def _empty_seat_groups(facts: _Facts, group: etree._Element) -> None:
+    """eInjury.SeatGroup with eInjury.27 "N" for each seat a VEDS document reports empty."""
+    if facts.veds is None:
+        return
+    taken = {
+        codes.SEAT_LOCATION.get(str(facts.occupant(i).get("seat", "")))
+        for i in range(len(facts.case.result.occupants))
+    }
+    for code in facts.veds.empty_seats:
+        location = codes.VEDS_SEAT_LOCATION.get(code)
+        if location is None or location in taken:
+            continue
+        taken.add(location)
+        seat = _Writer.add(group, "eInjury.SeatGroup")
+        _Writer.add(seat, "eInjury.26", location)
+        _Writer.add(seat, "eInjury.27", codes.ACN_YES_NO[False])
+        facts.fill("eInjury.27", f"source_document: seat code {code} not occupied")
+
+
 def _vehicle_facts(facts: _Facts) -> dict[str, str]:
     """eInjury.16, .18-.20 from a VEDS case's vehicle (JSON notifications carry none)."""
     vehicle = (facts.case.source_mapping or {}).get("vehicle") or {}
@@ -379,7 +425,7 @@ def _collision_group(facts: _Facts, parent: etree._Element, i: int) -> None:
     case = facts.case
     group = w.add(parent, "eInjury.CollisionGroup")
     first = i == 0  # case-level facts are recorded once
-    note = facts if first else _Facts(case=case, unreported=facts.unreported)
+    note = facts if first else _Facts(case=case, unreported=facts.unreported, veds=facts.veds)
     note.leave_out("eInjury.11", "the ACN company is not in the notification")
     low, high = INCIDENT_ID_CHARS
     if low <= len(case.event_id) <= high:
@@ -409,14 +455,7 @@ def _collision_group(facts: _Facts, parent: etree._Element, i: int) -> None:
     else:
         note.leave_out("eInjury.21", "multiple impacts not reported")
     pulse = case.result.pulse
-    w.add(
-        group,
-        "eInjury.22",
-        str(_integer_kmh(pulse.delta_v_kmh)),
-        VelocityUnit=codes.VELOCITY_UNIT_KMH,
-        DeltaVelocityOrdinal="1",
-    )
-    note.fill("eInjury.22", "result.pulse.delta_v_kmh (km/h, nearest integer)")
+    _delta_velocities(note, group)
     decided = case.result.occupants[i].triage.iss15_plus
     w.add(group, "eInjury.23", codes.YES_NO[decided])
     facts.fill("eInjury.23", f"result.occupants[{i}].triage.iss15_plus", i)
@@ -430,6 +469,7 @@ def _collision_group(facts: _Facts, parent: etree._Element, i: int) -> None:
         note.leave_out("eInjury.25", "rollover not reported")
     for seat in range(len(case.result.occupants)):
         _seat_group(note, group, seat)
+    _empty_seat_groups(note, group)
 
 
 def _seat_row_location(facts: _Facts, i: int) -> str | None:

@@ -399,9 +399,13 @@ def test_the_record_of_a_veds_case_is_valid_and_says_what_the_case_says(
     _, tree = _record(api, case_id)
     for pcr, decided in zip(_reports(tree), stored["result"]["occupants"], strict=True):
         group = pcr.find("n:eInjury/n:eInjury.CollisionGroup", NS)
-        delta_v = group.find("n:eInjury.22", NS)
-        assert abs(int(delta_v.text or "") - stored["result"]["pulse"]["delta_v_kmh"]) <= 0.5
-        assert delta_v.get("VelocityUnit") == "9921001"
+        pulses = group.findall("n:eInjury.22", NS)
+        assert {p.get("VelocityUnit") for p in pulses} == {"9921001"}
+        assert [p.get("DeltaVelocityOrdinal") for p in pulses] == [
+            str(n) for n in range(1, len(pulses) + 1)
+        ]
+        triaged = stored["result"]["pulse"]["delta_v_kmh"]
+        assert any(abs(int(p.text or "") - triaged) <= 0.5 for p in pulses)
         flagged = decided["triage"]["iss15_plus"]
         assert _text(group, "n:eInjury.23") == ("9923003" if flagged else "9923001")
         vehicle = stored["source_mapping"]["vehicle"]
@@ -417,7 +421,9 @@ def test_a_veds_rollover_with_assumed_fields_leaves_them_out(api: ApiClient) -> 
     assert _text(group, "n:eInjury.25") == "Y"
     assert _text(group, "n:eInjury.21") == "9923003"
     assert (_text(group, "n:eInjury.18"), _text(group, "n:eInjury.19")) == ("Ford", "Focus")
-    assert _text(group, "n:eInjury.22") == "48"  # 48.3 km/h, the pulse triaged
+    # both pulses in the document's order, km/h: 25, then 48.3 (the one triaged)
+    assert _texts(group, "n:eInjury.22") == ["25", "48"]
+    assert [p.get("DeltaVelocityOrdinal") for p in group.findall("n:eInjury.22", NS)] == ["1", "2"]
     # VEDS names no drive side: the driver's side is not known; the rear right seat's is
     assert driver.find("n:eInjury/n:eInjury.06", NS) is None
     assert _text(rear, "n:eInjury/n:eInjury.06") == "2906017"
@@ -429,6 +435,19 @@ def test_a_veds_rollover_with_assumed_fields_leaves_them_out(api: ApiClient) -> 
         "Y",
     ]
     assert "eInjury.06" in r.headers["NEMSIS-Left-Out"]
+
+
+def test_a_veds_seat_reported_empty_has_its_seat_group(api: ApiClient) -> None:
+    case_id = _post_veds(api, (VEDS_DIR / "kph-frontal.xml").read_bytes())["case_id"]
+    _, tree = _record(api, case_id)
+    for pcr in _reports(tree):
+        seats = pcr.findall("n:eInjury/n:eInjury.CollisionGroup/n:eInjury.SeatGroup", NS)
+        assert [(_text(s, "n:eInjury.26"), _text(s, "n:eInjury.27")) for s in seats] == [
+            ("2926001", "Y"),  # driver
+            ("2926005", "Y"),  # front passenger
+            ("2926007", "N"),  # VEDS seat 3, second row left, reported empty
+        ]
+        assert _text(pcr, "n:eInjury/n:eInjury.CollisionGroup/n:eInjury.22") == "32"  # 32.18688 km/h
 
 
 def test_a_veds_belt_not_reported_is_not_written_as_unbelted(api: ApiClient) -> None:
