@@ -17,7 +17,7 @@ from fastapi.security import HTTPAuthorizationCredentials
 from service.auth import Caller, _authenticate, _bearer, caller_for_key_id
 from service.deps import ContextDep
 from service.nemsis.mapping import NemsisRecord
-from service.nemsis.service import agency_from, record_for
+from service.nemsis.service import record_for
 from service.pages.session import SESSION_COOKIE, read_session
 from service.problems import PROBLEM_MEDIA_TYPE, Problem
 
@@ -176,10 +176,14 @@ def read_nemsis_record(
     NEMSIS) comes from the query, else the `AACN_NEMSIS_AGENCY_*` settings; missing,
     422 naming the parameter.
     """
-    agency = agency_from(
-        ctx.settings, state_id=agency_state_id, number=agency_number, state=agency_state
+    record = record_for(
+        ctx,
+        case_id,
+        caller,
+        agency_state_id=agency_state_id,
+        agency_number=agency_number,
+        agency_state=agency_state,
     )
-    record = record_for(ctx, case_id, caller, agency)
     return xml_response(record)
 
 

@@ -137,13 +137,25 @@ def checked_record(case: StoredCase, agency: Agency) -> NemsisRecord:
     return record
 
 
-def record_for(ctx: ServiceContext, case_id: str, caller: Caller, agency: Agency) -> NemsisRecord:
+def record_for(
+    ctx: ServiceContext,
+    case_id: str,
+    caller: Caller,
+    *,
+    agency_state_id: str | None = None,
+    agency_number: str | None = None,
+    agency_state: str | None = None,
+) -> NemsisRecord:
     """The NEMSIS record of a case the caller may read (module docstring).
+
+    The caller's role is checked first, then the receiving agency (given, else the
+    settings: :func:`agency_from`), then the case.
 
     Raises
     ------
     Forbidden
         The caller's role reads no records.
+    AgencyMissing
     NotFound
         No such case, or (a submitter) another client's case.
     NemsisRecordInvalid
@@ -153,6 +165,9 @@ def record_for(ctx: ServiceContext, case_id: str, caller: Caller, agency: Agency
             f"The key {caller.name!r} has role {caller.role.value!r}; NEMSIS records need "
             "auditor or admin, or the submitter of the case."
         )
+    agency = agency_from(
+        ctx.settings, state_id=agency_state_id, number=agency_number, state=agency_state
+    )
     case = cases_service.get_case(ctx, case_id)
     if caller.role is Role.SUBMITTER and case.client_name != caller.name:
         raise NotFound(f"No case with id {case_id!r}.")

@@ -447,7 +447,8 @@ def test_a_veds_seat_reported_empty_has_its_seat_group(api: ApiClient) -> None:
             ("2926005", "Y"),  # front passenger
             ("2926007", "N"),  # VEDS seat 3, second row left, reported empty
         ]
-        assert _text(pcr, "n:eInjury/n:eInjury.CollisionGroup/n:eInjury.22") == "32"  # 32.18688 km/h
+        delta_v = _text(pcr, "n:eInjury/n:eInjury.CollisionGroup/n:eInjury.22")
+        assert delta_v == "32"  # 32.18688 km/h
 
 
 def test_a_veds_belt_not_reported_is_not_written_as_unbelted(api: ApiClient) -> None:
@@ -489,6 +490,8 @@ def test_who_may_read_which_record(api: ApiClient) -> None:
         "9b2f0c58-1d7e-4f0e-8f5e-3d1c2b4a6e70", case_id
     ), "another client's case reads as an unknown one"
     assert_problem(_get(api, case_id, "metrics"), 403)
+    no_agency = api.client.get(f"/v1/cases/{case_id}/nemsis", headers=api.headers("metrics"))
+    assert_problem(no_agency, 403)  # the role is checked first
     assert_problem(api.client.get(f"/v1/cases/{case_id}/nemsis", params=AGENCY), 401)
 
 
