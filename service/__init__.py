@@ -20,11 +20,14 @@ Layout, by feature (``docs/layout.md`` has the whole map)::
                     veds and veds_xml (VEDS XML input), examples
     pages/          the dispatcher's pages: endpoints (router), views, drawing, session
                     (sign-in cookie), session_end (sign-out), templates/, static/
+    nemsis/         the case as a NEMSIS v3.5.1 EMS record: endpoints (router), service,
+                    mapping, codes, veds_source, validate (xsd/), export and command
     db/             tables, session, migrate, repository (every query), spool (outages)
     jobs/           batch (local pool), dask, io, rescore: never on the request path
     cli/            the aacn-triage command: main, operate, research, common
 
 Imports run one way: cli -> jobs -> cases -> db and the infrastructure; pages -> cases;
+nemsis -> cases, and the pages' session (its record opens with the pages' cookie);
 only app imports a router; cases imports neither pages, jobs nor cli
 (``tests/test_architecture.py``).
 """
