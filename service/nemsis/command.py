@@ -28,7 +28,7 @@ def _run(args: argparse.Namespace) -> int:
     from service.db import migrate
     from service.db.session import make_engine, make_sessionmaker
     from service.nemsis.export import export_records
-    from service.nemsis.service import AgencyMissing, agency_from
+    from service.nemsis.service import AgencyMissing, NemsisSchemaUnavailable, agency_from
     from service.settings import get_settings
 
     def say(text: str) -> None:
@@ -58,15 +58,19 @@ def _run(args: argparse.Namespace) -> int:
             bar.total = n
             bar.refresh()
 
-        summary = export_records(
-            sessions,
-            agency,
-            Path(args.out),
-            since=args.since,
-            resume=args.resume,
-            progress=bar.update,
-            total=set_total,
-        )
+        try:
+            summary = export_records(
+                sessions,
+                agency,
+                Path(args.out),
+                since=args.since,
+                resume=args.resume,
+                progress=bar.update,
+                total=set_total,
+            )
+        except NemsisSchemaUnavailable as exc:
+            say(f"error: {exc.detail}")
+            return 1
     say(
         f"{summary.cases} cases: {summary.written} records written, {summary.kept} kept from "
         f"an earlier run, {len(summary.refused)} refused; in {args.out}"

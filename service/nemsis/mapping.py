@@ -178,7 +178,7 @@ def pdof_clock_hour(pdof_deg: float) -> int:
     """PDOF in degrees clockwise from straight ahead as a clock hour 1-12 (12 frontal).
 
     The nearest hour, halves rounded up (15 deg is 1 o'clock); the inverse of
-    :func:`service.veds.clock_to_pdof_deg` on whole hours.
+    :func:`service.cases.veds.clock_to_pdof_deg` on whole hours.
     """
     hour = math.floor((pdof_deg % 360.0) / 30.0 + 0.5) % 12
     return 12 if hour == 0 else hour
@@ -573,9 +573,7 @@ def _report_comment(facts: _Facts, i: int, n: int) -> str:
     return "".join(_comment_text(line) for line in lines)
 
 
-def _report(
-    facts: _Facts, parent: etree._Element, i: int, agency: Agency, base: Mapping[str, list[str]]
-) -> None:
+def _report(facts: _Facts, parent: etree._Element, i: int, base: Mapping[str, list[str]]) -> None:
     """One PatientCareReport: occupant `i`."""
     case = facts.case
     n = len(case.result.occupants)
@@ -628,7 +626,7 @@ def build_record(case: StoredCase, agency: Agency) -> NemsisRecord:
         "eDispatch.01": [codes.COMPLAINT_TRAFFIC_INCIDENT],
     }
     for i in range(len(case.result.occupants)):
-        _report(facts, header, i, agency, base)
+        _report(facts, header, i, base)
     document = etree.tostring(root, xml_declaration=True, encoding="UTF-8", pretty_print=True)
     report = RecordReport(filled=tuple(facts.filled), left_out=tuple(facts.left_out))
     return NemsisRecord(case_id=case.case_id, document=document, report=report)

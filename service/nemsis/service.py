@@ -19,6 +19,8 @@ from __future__ import annotations
 import logging
 from typing import Final
 
+from lxml import etree
+
 from service.auth import Caller, Role
 from service.cases import service as cases_service
 from service.cases.result import StoredCase
@@ -32,6 +34,7 @@ __all__ = [
     "READERS",
     "AgencyMissing",
     "NemsisRecordInvalid",
+    "NemsisSchemaUnavailable",
     "agency_from",
     "checked_record",
     "record_for",
@@ -47,6 +50,12 @@ class AgencyMissing(DomainError):
     """The receiving agency's identity is missing or not what NEMSIS takes."""
 
     status, slug, title = 422, "validation", "Invalid request"
+
+
+class NemsisSchemaUnavailable(DomainError):
+    """The shipped NEMSIS schemas cannot be read (an install without its package data)."""
+
+    status, slug, title = 503, "nemsis-schema-unavailable", "NEMSIS schemas unavailable"
 
 
 class NemsisRecordInvalid(DomainError):
@@ -117,9 +126,18 @@ def checked_record(case: StoredCase, agency: Agency) -> NemsisRecord:
     ------
     NemsisRecordInvalid
         It does not validate (each violation named; nothing is handed out).
+    NemsisSchemaUnavailable
+        The shipped schemas cannot be read (503).
     """
     record = build_record(case, agency)
-    errors = validate(record.document)
+    try:
+        errors = validate(record.document)
+    except (OSError, etree.XMLSchemaParseError) as exc:
+        log.error("the NEMSIS schemas cannot be read: %s", exc)
+        raise NemsisSchemaUnavailable(
+            "The NEMSIS schemas shipped with the service cannot be read, so no record is "
+            "handed out unvalidated; the operator must reinstall the service."
+        ) from exc
     if errors:
         log.error(
             "NEMSIS record of case %s fails the schema: %s",
