@@ -10,7 +10,13 @@ import argparse
 import sys
 from datetime import datetime
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:  # the command line imports this module: nothing heavy at run time
+    from sqlalchemy.orm import Session, sessionmaker
+
+    from service.nemsis.export import ExportSummary
+    from service.nemsis.mapping import Agency
 
 __all__ = ["add_parser"]
 
@@ -22,12 +28,34 @@ def _since(text: str) -> datetime:
     return at
 
 
-def _run(args: argparse.Namespace) -> int:
+def _export(
+    args: argparse.Namespace, sessions: sessionmaker[Session], agency: Agency
+) -> ExportSummary:
+    """Run the export with a progress bar on standard error."""
     from tqdm import tqdm
 
+    from service.nemsis.export import export_records
+
+    with tqdm(desc="NEMSIS records", unit="case", file=sys.stderr) as bar:
+
+        def set_total(n: int) -> None:
+            bar.total = n
+            bar.refresh()
+
+        return export_records(
+            sessions,
+            agency,
+            Path(args.out),
+            since=args.since,
+            resume=args.resume,
+            progress=bar.update,
+            total=set_total,
+        )
+
+
+def _run(args: argparse.Namespace) -> int:
     from service.db import migrate
     from service.db.session import make_engine, make_sessionmaker
-    from service.nemsis.export import export_records
     from service.nemsis.service import AgencyMissing, NemsisSchemaUnavailable, agency_from
     from service.settings import get_settings
 
@@ -51,26 +79,14 @@ def _run(args: argparse.Namespace) -> int:
         return 2
     if settings.auto_migrate:
         migrate.upgrade(settings.database_url)
-    sessions = make_sessionmaker(make_engine(settings.database_url))
-    with tqdm(desc="NEMSIS records", unit="case", file=sys.stderr) as bar:
-
-        def set_total(n: int) -> None:
-            bar.total = n
-            bar.refresh()
-
-        try:
-            summary = export_records(
-                sessions,
-                agency,
-                Path(args.out),
-                since=args.since,
-                resume=args.resume,
-                progress=bar.update,
-                total=set_total,
-            )
-        except NemsisSchemaUnavailable as exc:
-            say(f"error: {exc.detail}")
-            return 1
+    engine = make_engine(settings.database_url)
+    try:
+        summary = _export(args, make_sessionmaker(engine), agency)
+    except NemsisSchemaUnavailable as exc:
+        say(f"error: {exc.detail}")
+        return 1
+    finally:
+        engine.dispose()  # no connection left to the garbage collector
     say(
         f"{summary.cases} cases: {summary.written} records written, {summary.kept} kept from "
         f"an earlier run, {len(summary.refused)} refused; in {args.out}"

@@ -561,11 +561,12 @@ def test_a_record_that_would_not_validate_is_refused_naming_the_element(
 
 
 def test_export_writes_resumes_and_rewrites_the_same_records(
-    api: ApiClient,
+    api_any_db: ApiClient,
     tmp_path: Path,
     monkeypatch: pytest.MonkeyPatch,
     capsys: pytest.CaptureFixture[str],
 ) -> None:
+    api = api_any_db  # SQLite and PostgreSQL
     ids = [post_case(api, make())["case_id"] for make in (summary, _several, _rollover)]
     monkeypatch.setenv("AACN_DATABASE_URL", api.settings.database_url)
     out = tmp_path / "records"
