@@ -480,7 +480,8 @@ def test_a_veds_case_without_a_crash_time_has_none_in_its_record(api: ApiClient)
 # ----------------------------------------------------------------- access
 
 
-def test_who_may_read_which_record(api: ApiClient) -> None:
+def test_who_may_read_which_record(api_any_db: ApiClient) -> None:
+    api = api_any_db  # SQLite and PostgreSQL
     case_id = post_case(api, summary())["case_id"]  # by "submitter-client"
     for role in ("auditor", "admin", "submitter"):
         assert _get(api, case_id, role).status_code == 200
