@@ -167,6 +167,22 @@ def test_the_pdof_clock_hour_inverts_the_veds_reading(hour: int) -> None:
     assert pdof_clock_hour(clock_to_pdof_deg(hour) - 14.9) == hour
 
 
+def test_the_documented_stored_case_has_a_valid_record_without_a_server() -> None:
+    from service.cases.examples import EXAMPLE_STORED_CASE
+    from service.cases.notification import EXAMPLE_NOTIFICATIONS
+
+    # the example's notification is abridged: the documented one of the same event
+    doc = {**EXAMPLE_STORED_CASE, "notification": EXAMPLE_NOTIFICATIONS["summary"]["value"]}
+    record = checked_record(StoredCase.model_validate(doc), Agency("C034", "351-C034P2", "09"))
+    assert validate(record.document) == []
+    assert (
+        record.document
+        == checked_record(
+            StoredCase.model_validate(copy.deepcopy(doc)), Agency("C034", "351-C034P2", "09")
+        ).document
+    )
+
+
 # ------------------------------------------------------------- JSON cases
 
 
