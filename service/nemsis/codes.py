@@ -23,6 +23,7 @@ from enum import Enum
 from typing import Final
 
 __all__ = [
+    "AGE_UNIT_MONTHS",
     "AGE_UNIT_YEARS",
     "AIRBAG_DEPLOYMENT",
     "COMPLAINT_TRAFFIC_INCIDENT",
@@ -61,8 +62,9 @@ VELOCITY_UNIT_KMH: Final = "9921001"
 TRIAGE_TELEMETRY_SEVERE: Final = "2904013"
 #: eDispatch.01 (eDispatch_v3.xsd ``DispatchReason``): "Traffic/Transportation Incident".
 COMPLAINT_TRAFFIC_INCIDENT: Final = "2301069"
-#: ePatient.16 (ePatient_v3.xsd ``AgeUnits``): Years.
+#: ePatient.16 (ePatient_v3.xsd ``AgeUnits``): Years, Months.
 AGE_UNIT_YEARS: Final = "2516009"
+AGE_UNIT_MONTHS: Final = "2516007"
 #: ePatient.25 (commonTypes_v3.xsd ``Sex``), by the notification's ``sex``.
 SEX: Final[dict[str, str]] = {"female": "9919001", "male": "9919003"}
 

@@ -83,6 +83,8 @@ VEHICLE_TEXT_CHARS: Final = {"eInjury.16": (2, 100), "eInjury.18": (2, 100), "eI
 YEAR_RANGE: Final = (1900, 2050)
 #: Ages ePatient.15 takes (ePatient_v3.xsd ``Age``), in its unit.
 AGE_RANGE: Final = (1, 120)
+#: Months in a year (ages under one year are written in months, ePatient.16 Months).
+MONTHS_PER_YEAR: Final = 12
 _AWARE: Final = TypeAdapter(AwareDatetime)
 _AGENCY_TEXT = re.compile(r"^[\x20-\x7e]+$")
 _STATE_CODE = re.compile(r"^[0-9]{2}$")
@@ -537,13 +539,18 @@ def _patient_values(facts: _Facts, i: int) -> dict[str, list[str]]:
     values: dict[str, list[str]] = {}
     age = facts.given("age_years", i)
     if isinstance(age, int | float) and not isinstance(age, bool):
-        years = math.floor(age)
+        # completed years; under one year, completed months (MONTHS_PER_YEAR, exact)
+        years, months = math.floor(age), math.floor(age * MONTHS_PER_YEAR)
         if AGE_RANGE[0] <= years <= AGE_RANGE[1]:
             values["ePatient.15"] = [str(years)]
             values["ePatient.16"] = [codes.AGE_UNIT_YEARS]
             facts.fill("ePatient.15", f"occupants[{i}].age_years (completed years)", i)
+        elif years < AGE_RANGE[0] and months >= AGE_RANGE[0]:
+            values["ePatient.15"] = [str(months)]
+            values["ePatient.16"] = [codes.AGE_UNIT_MONTHS]
+            facts.fill("ePatient.15", f"occupants[{i}].age_years x 12 (completed months)", i)
         else:
-            facts.leave_out("ePatient.15", "age under one year: not written in years", i)
+            facts.leave_out("ePatient.15", "age under one month: Not Recorded", i)
     sex = facts.given("sex", i)
     if isinstance(sex, str) and sex in codes.SEX:
         values["ePatient.25"] = [codes.SEX[sex]]

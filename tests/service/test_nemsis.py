@@ -150,7 +150,7 @@ def test_every_code_used_is_in_the_nemsis_code_list() -> None:
     assert codes.TRIAGE_TELEMETRY_SEVERE in _enumeration("TraumaTriageCriteriaSteps3and4")
     assert codes.COMPLAINT_TRAFFIC_INCIDENT in _enumeration("DispatchReason")
     assert set(codes.SEX.values()) <= _enumeration("Sex")
-    assert codes.AGE_UNIT_YEARS in _enumeration("AgeUnits")
+    assert {codes.AGE_UNIT_YEARS, codes.AGE_UNIT_MONTHS} <= _enumeration("AgeUnits")
     assert codes.NOT_RECORDED in _enumeration("NV.NotRecorded")
 
 
@@ -363,6 +363,15 @@ def test_facts_the_sender_left_out_are_left_out(api: ApiClient) -> None:
     assert {"eInjury.06", "eInjury.21", "eInjury.25"} <= set(
         r.headers["NEMSIS-Left-Out"].split(", ")
     )
+
+
+def test_an_infant_s_age_is_in_months(api: ApiClient) -> None:
+    body = summary(30.0, 0.0, seat="rear_right", airbag="absent")
+    body["occupants"][0]["age_years"] = 0.75
+    _, tree = _record(api, post_case(api, body)["case_id"])
+    (pcr,) = _reports(tree)
+    assert _text(pcr, "n:ePatient/n:ePatient.AgeGroup/n:ePatient.15") == "9"
+    assert _text(pcr, "n:ePatient/n:ePatient.AgeGroup/n:ePatient.16") == "2516007"  # months
 
 
 def test_right_hand_drive_puts_the_driver_on_the_right(api: ApiClient) -> None:
