@@ -19,6 +19,7 @@ from service.deps import ContextDep
 from service.nemsis.mapping import NemsisRecord
 from service.nemsis.service import record_for
 from service.pages.session import SESSION_COOKIE, read_session
+from service.pages.session_end import session_has_ended
 from service.problems import PROBLEM_MEDIA_TYPE, Problem
 
 __all__ = ["LEFT_OUT_HEADER", "NEMSIS_MEDIA_TYPE", "PLACEHOLDERS_HEADER", "router"]
@@ -76,15 +77,20 @@ def _caller(
     request: Request,
     credentials: Annotated[HTTPAuthorizationCredentials | None, Depends(_bearer)],
 ) -> Caller:
-    """An API key's caller, or the signed-in case pages' (their session cookie)."""
+    """An API key's caller, or the signed-in case pages' (their session cookie).
+
+    The cookie is taken as the pages take it: signed, not expired, not signed out
+    (``service.pages.session_end``), its key active; else the Bearer key is asked for.
+    """
     if credentials is None and SESSION_COOKIE in request.cookies:
         ctx = request.app.state.ctx
         session = read_session(
             ctx.session_secret, request.cookies.get(SESSION_COOKIE), now=time.time()
         )
-        caller = caller_for_key_id(ctx.sessions, session.key_id) if session else None
-        if caller is not None:
-            return caller
+        if session is not None and not session_has_ended(ctx.sessions, session):
+            caller = caller_for_key_id(ctx.sessions, session.key_id)
+            if caller is not None:
+                return caller
     return _authenticate(request, credentials)
 
 

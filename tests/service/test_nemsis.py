@@ -28,6 +28,7 @@ from service.nemsis import codes
 from service.nemsis.mapping import Agency, pdof_clock_hour
 from service.nemsis.service import NemsisRecordInvalid, agency_from, checked_record
 from service.nemsis.validate import XSD_DIR, validate
+from service.pages.session import SESSION_COOKIE
 from service.settings import Settings, get_settings
 from tests.service.pages_support import Page, csrf_token
 from tests.support import ApiClient, assert_problem, example, post_case, stored_case, summary
@@ -565,6 +566,14 @@ def test_the_case_page_links_the_record_and_its_session_opens_it(api: ApiClient)
     r = browser.get(link.attrs["href"], params=AGENCY)
     assert r.status_code == 200, r.text
     assert validate(r.content) == []
+    # a copy of the cookie kept after the sign-out opens nothing (issue 41)
+    replay = TestClient(api.client.app, base_url="https://testserver")
+    kept = browser.cookies.get(SESSION_COOKIE)
+    replay.cookies.set(SESSION_COOKIE, kept, domain="testserver.local", path="/v1")
+    assert replay.get(link.attrs["href"], params=AGENCY).status_code == 200
+    token = Page(browser.get("/v1/reports").text).one("input", name="csrf_token").attrs["value"]
+    assert browser.post("/v1/session/logout", data={"csrf_token": token}).status_code == 303
+    assert_problem(replay.get(link.attrs["href"], params=AGENCY), 401)
 
 
 # ------------------------------------------------------- a record refused
