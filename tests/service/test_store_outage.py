@@ -95,6 +95,23 @@ class _Load:
         for t in self._threads:
             t.join(60)
 
+    def wait_for(self, status: int, after: int = 0, timeout_s: float = 60.0) -> None:
+        """Wait until an answer with ``status`` arrives after the first ``after`` answers.
+
+        The phases of a load test are judged by what the clients saw, not by the clock: on
+        a shared machine two threads may send nothing for seconds.
+        """
+        deadline = time.monotonic() + timeout_s
+        while time.monotonic() < deadline:
+            with self._lock:
+                if any(s == status for _, s, _ in self.answers[after:]):
+                    return
+            time.sleep(0.05)
+
+    def count(self) -> int:
+        with self._lock:
+            return len(self.answers)
+
 
 @pytest.fixture
 def outage_app(own_postgres: Any, tmp_path: Path) -> Iterator[tuple[TestClient, str, Any]]:
@@ -180,17 +197,21 @@ def test_postgres_stopped_and_started_under_load_loses_and_doubles_nothing(
     client, key, ctx = outage_app
     with _Load(client, key) as load:
         time.sleep(PHASE_S)
+        load.wait_for(201)
         own_postgres.pg_ctl("stop", "-m", "fast")
         try:
             time.sleep(OUTAGE_S)
+            load.wait_for(202)
             ready = client.get("/readyz")
             assert ready.status_code == 200
             assert ready.json()["status"] == "degraded"
             listing = client.get("/v1/cases", headers={"Authorization": f"Bearer {key}"})
             assert listing.status_code == 503, "reads need the store: 503, not 500"
         finally:
+            restarted_after = load.count()
             own_postgres.pg_ctl("start")
         time.sleep(PHASE_S)
+        load.wait_for(201, after=restarted_after)
     answers = load.answers
     assert any(s == 202 for _, s, _ in answers), "some cases were answered from the spool"
     assert any(s == 201 for _, s, _ in answers)
