@@ -153,12 +153,12 @@ def rotate_api_key(sessions: sessionmaker[Session], name_or_id: str) -> tuple[Ap
     return key, secret
 
 
-_bearer = HTTPBearer(auto_error=False, description="API key: `Authorization: Bearer <key>`.")
+bearer_scheme = HTTPBearer(auto_error=False, description="API key: `Authorization: Bearer <key>`.")
 
 
-def _authenticate(
+def authenticate(
     request: Request,
-    credentials: Annotated[HTTPAuthorizationCredentials | None, Depends(_bearer)],
+    credentials: Annotated[HTTPAuthorizationCredentials | None, Depends(bearer_scheme)],
 ) -> Caller:
     if credentials is None or credentials.scheme.lower() != "bearer" or not credentials.credentials:
         raise Unauthorized("Send an API key as `Authorization: Bearer <key>`.")
@@ -202,7 +202,7 @@ def _check_role(caller: Caller, allowed: frozenset[Role]) -> Caller:
 def _require(*roles: Role) -> object:
     allowed = frozenset(roles) | {Role.ADMIN}
 
-    def dependency(caller: Annotated[Caller, Depends(_authenticate)]) -> Caller:
+    def dependency(caller: Annotated[Caller, Depends(authenticate)]) -> Caller:
         return _check_role(caller, allowed)
 
     return dependency
@@ -210,11 +210,11 @@ def _require(*roles: Role) -> object:
 
 def _metrics_access(
     request: Request,
-    credentials: Annotated[HTTPAuthorizationCredentials | None, Depends(_bearer)],
+    credentials: Annotated[HTTPAuthorizationCredentials | None, Depends(bearer_scheme)],
 ) -> None:
     if request.app.state.ctx.settings.metrics_access == "open":
         return
-    _check_role(_authenticate(request, credentials), frozenset({Role.METRICS, Role.ADMIN}))
+    _check_role(authenticate(request, credentials), frozenset({Role.METRICS, Role.ADMIN}))
 
 
 require_submitter = Annotated[Caller, Depends(_require(Role.SUBMITTER))]

@@ -14,7 +14,7 @@ from fastapi import APIRouter, Depends, Path, Query, Request
 from fastapi.responses import Response
 from fastapi.security import HTTPAuthorizationCredentials
 
-from service.auth import Caller, _authenticate, _bearer, caller_for_key_id
+from service.auth import Caller, authenticate, bearer_scheme, caller_for_key_id
 from service.deps import ContextDep
 from service.nemsis.mapping import NemsisRecord
 from service.nemsis.service import record_for
@@ -75,7 +75,7 @@ _AGENCY_TEXT = r"^[\x20-\x7e]+$"
 
 def _caller(
     request: Request,
-    credentials: Annotated[HTTPAuthorizationCredentials | None, Depends(_bearer)],
+    credentials: Annotated[HTTPAuthorizationCredentials | None, Depends(bearer_scheme)],
 ) -> Caller:
     """An API key's caller, or the signed-in case pages' (their session cookie).
 
@@ -91,7 +91,7 @@ def _caller(
             caller = caller_for_key_id(ctx.sessions, session.key_id)
             if caller is not None:
                 return caller
-    return _authenticate(request, credentials)
+    return authenticate(request, credentials)
 
 
 def _problems(*statuses: int) -> dict[int | str, dict[str, Any]]:
