@@ -299,7 +299,7 @@ def outcome_frame(path: Path | None = None) -> pd.DataFrame:
     Returns
     -------
     DataFrame
-        Columns :data:`KEY_COLUMNS`, ``stratum``, ``ratwgt``, ``iss``, ``mais``,
+        Columns :data:`KEY_COLUMNS`, ``stratum``, ``ratwgt``, ``female``, ``iss``, ``mais``,
         ``died``, ``ejection``, ``model_year`` and ``max_ais_<region>``.
     """
     frame = load_occupant_frame(path)
@@ -307,6 +307,7 @@ def outcome_frame(path: Path | None = None) -> pd.DataFrame:
         *KEY_COLUMNS,
         "stratum",
         "ratwgt",
+        "female",
         "iss",
         "mais",
         "died",

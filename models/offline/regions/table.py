@@ -52,6 +52,7 @@ from models.assumptions import Assumption
 from models.impact_mode import ImpactMode, classify_impact
 from models.injury.assessment import assess
 from models.injury.measures import InjuryMeasures
+from models.injury.reported import reported_levels
 from models.injury.scores import ISS_REGIONS
 from models.lpm.fingerprint import lpm_code_sha256, sources_sha256
 from models.lpm.params import DEFAULT_SET, ParameterSet, load_parameter_set
@@ -79,15 +80,20 @@ __all__ = [
 
 #: Injury measures cached per run (names with units, as InjuryMeasures).
 MEASURE_COLUMNS: Final[tuple[str, ...]] = tuple(f.name for f in fields(InjuryMeasures))
-#: Source files (under models/) whose content changes the runs or the table,
-#: beside the occupant-model code (:data:`models.lpm.fingerprint.MODEL_SOURCES`).
-TABLE_SOURCES: Final[tuple[str, ...]] = (
+#: Source files (under models/) whose content changes the runs, beside the
+#: occupant-model code (:data:`models.lpm.fingerprint.MODEL_SOURCES`).
+RUN_SOURCES: Final[tuple[str, ...]] = (
     "pulse.py",
     "impact_mode.py",
     "notification.py",
     "sensor_evidence.py",
-    "risk_calibration.py",
     "offline/regions/rows.py",
+)
+#: ... and those that change only the table made from the runs.
+TABLE_SOURCES: Final[tuple[str, ...]] = (
+    *RUN_SOURCES,
+    "risk_calibration.py",
+    "injury/reported.py",
     "offline/regions/table.py",
 )
 #: Runs handed to the batch at once (the cache is appended after each chunk).
@@ -129,13 +135,13 @@ def physics_input(row: OccupantRow, side_airbag: AirbagState | None = None) -> P
     )
 
 
-def physics_key(params: ParameterSet, label: str) -> str:
-    """Cache key: the variant label and every checksum that can change a run."""
+def physics_key(params: ParameterSet, label: str, *, table: bool = False) -> str:
+    """Cache key: the variant label and every checksum that can change a run (or the table)."""
     parts = [
         label,
         ENGINE_VERSION,
         lpm_code_sha256(),
-        sources_sha256(TABLE_SOURCES),
+        sources_sha256(TABLE_SOURCES if table else RUN_SOURCES),
         params.name,
         params.sha256,
     ]
@@ -294,8 +300,11 @@ def _assessed(row: OccupantRow, run: dict[str, Any]) -> dict[str, Any]:
         mode = ImpactMode(run["mode"])
         a = assess(measures, row.body, row.age_years, mode.value)
         p0 = zero_load_probability(measures, row.body, row.age_years, mode)
+        shown = reported_levels(a.region_ais)
         for region in ISS_REGIONS:
             out[f"lpm_ais_{region}"] = a.region_ais[region]
+            out[f"reported_ais_{region}"] = shown.region_ais[region]
+        out["reported_iss"] = shown.iss
         for region in ("head_neck", "chest", "abdomen"):
             dist = a.region_ais_probability[region]
             out[f"lpm_p_ais3_{region}"] = float(sum(dist[3:]))
@@ -332,10 +341,12 @@ def physics_table(
         Keys :data:`KEY_COLUMNS`; the occupant's inputs (seat, body, belt,
         frontal airbag, age, delta-V km/h, PDOF deg, rollover, multiple
         impacts); ``mode``, ``angle_deg``, ``in_lpm``, ``lpm_ok``; the measures
-        :data:`MEASURE_COLUMNS`; ``lpm_ais_<ISS region>`` (the level the service
-        shows), ``lpm_p_ais3_<region>`` (P(AIS >= 3) of head_neck, chest,
-        abdomen from the risk curves), ``lpm_iss``, ``lpm_p_iss15`` (the risk
-        curves'), ``lpm_p_iss15_zero_load`` and ``lpm_p_iss15_corrected`` (the
+        :data:`MEASURE_COLUMNS`; ``lpm_ais_<ISS region>`` (the assessment's
+        level), ``reported_ais_<ISS region>`` and ``reported_iss`` (as the service
+        reports them: :mod:`models.injury.reported`), ``lpm_p_ais3_<region>``
+        (P(AIS >= 3) of head_neck, chest, abdomen from the risk curves),
+        ``lpm_iss``, ``lpm_p_iss15`` (the risk curves'),
+        ``lpm_p_iss15_zero_load`` and ``lpm_p_iss15_corrected`` (the
         zero-load-corrected P the service reports).
     """
     rows = load_occupant_rows() if rows is None else rows
@@ -383,7 +394,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         params=ps,
     )
     suffix = "" if args.limit is None else f"-first{args.limit}"
-    path = out_dir / f"physics-{physics_key(ps, f'side_airbag={side}')}{suffix}.csv.gz"
+    key = physics_key(ps, f"side_airbag={side}", table=True)
+    path = out_dir / f"physics-{key}{suffix}.csv.gz"
     table.to_csv(path, index=False)
     n_lpm = int(table["lpm_ok"].sum())
     sys.stdout.write(
