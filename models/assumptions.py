@@ -40,6 +40,8 @@ class AssumptionCode(StrEnum):
     SURROGATE_UNAVAILABLE = "surrogate_unavailable"
     OUTSIDE_SURROGATE_DESIGN = "outside_surrogate_design"
     POINT_OUTSIDE_INTERVAL = "point_outside_interval"
+    OCCUPANT_MODEL_AIS_CAPPED = "occupant_model_ais_capped"
+    SIDE_BEYOND_TESTED_SEVERITY = "side_beyond_tested_severity"
     # what a VEDS document (RFC 8148) left open when it was mapped to a notification
     VEDS_CRASH_TIME_ASSUMED = "veds_crash_time_assumed"
     VEDS_MOST_SEVERE_PULSE = "veds_most_severe_pulse"
@@ -119,6 +121,18 @@ DESCRIPTIONS: Final[dict[AssumptionCode, str]] = {
     ),
     AssumptionCode.POINT_OUTSIDE_INTERVAL: (
         "The direct occupant-model estimate lies outside the surrogate's 95 % interval."
+    ),
+    AssumptionCode.OCCUPANT_MODEL_AIS_CAPPED: (
+        "The occupant model's risk curves put a body region at AIS 6 (maximal); a dummy "
+        "measure cannot represent that level, so the region is reported at AIS 5 and the ISS "
+        "from the reported levels (models/injury/reported.py). On real crashes most occupants "
+        "the models put at AIS 6 had no AIS 5+ injury (docs/occupant-models.md)."
+    ),
+    AssumptionCode.SIDE_BEYOND_TESTED_SEVERITY: (
+        "Side impact with a lateral delta-V above the severity of the side crash tests the "
+        "side occupant models were checked against (IIHS side test, struck-car delta-V up to "
+        "31 km/h): the models extrapolate the door intrusion and their head and chest loads are "
+        "not bounded by any published test; read their measures as an upper bound."
     ),
     AssumptionCode.VEDS_CRASH_TIME_ASSUMED: (
         "VEDS: no incident time (veds:Crash/nc:ActivityDate): the document's received or post "

@@ -35,11 +35,17 @@ from typing import Final
 
 from models.injury.scores import iss
 
-__all__ = ["MAX_REPORTED_AIS", "ReportedLevels", "reported_levels"]
+__all__ = ["MAX_REPORTED_AIS", "SIDE_TESTED_MAX_DELTA_V_KMH", "ReportedLevels", "reported_levels"]
 
 #: Highest AIS level reported for a region from the occupant models' measures
 #: (AIS 5, "critical"). [R] The module docstring gives the reasons.
 MAX_REPORTED_AIS: Final[int] = 5
+#: Highest struck-car (lateral) delta-V of the side tests the side occupant models
+#: were checked against, km/h: the IIHS side test (1500 kg barrier at 50 km/h), whose
+#: delta-V by SMASH ranged 18-31 km/h over 49 tests (mean 24). [V]
+#: wbldb.lievers.net/01377 (IIHS side test severity against NASS-CDS side crashes).
+#: Above it the answer says that the side models extrapolate.
+SIDE_TESTED_MAX_DELTA_V_KMH: Final[float] = 31.0
 
 
 @dataclass(frozen=True)

@@ -12,6 +12,12 @@ from models.assumptions import Assumption, AssumptionCode
 from models.constants import Z_95
 from models.impact_mode import ImpactClassification, ImpactMode
 from models.injury.assessment import InjuryMeasures
+from models.injury.reported import (
+    MAX_REPORTED_AIS,
+    SIDE_TESTED_MAX_DELTA_V_KMH,
+    ReportedLevels,
+    reported_levels,
+)
 from models.lpm.domain import POSTURE_RANGE_DEG, SEAT_TRACK_RANGE_MM, clamp
 from models.lpm.params import ParameterSet
 from models.lpm.simulate import LpmResult, simulate
@@ -300,6 +306,47 @@ def _intervals_from_box(
     )
 
 
+def _reported(
+    index: int,
+    nominal: LpmResult,
+    impact: ImpactClassification,
+    pulse: ProcessedPulse,
+    iss_ci: tuple[float, float],
+    assumptions: list[Assumption],
+) -> tuple[ReportedLevels, tuple[float, float]]:
+    """The region AIS and ISS as reported (never AIS 6 from a measure), flagged.
+
+    The ISS interval is the surrogate's (of the curves' levels), widened to hold
+    the reported ISS when the cap lowered it.
+    """
+    assert nominal.assessment is not None
+    shown = reported_levels(nominal.assessment.region_ais)
+    if shown.capped:
+        assumptions.append(
+            Assumption(
+                AssumptionCode.OCCUPANT_MODEL_AIS_CAPPED,
+                f"occupants[{index}]: the occupant model's risk curves give AIS 6 in "
+                f"{', '.join(shown.capped)} (ISS {nominal.assessment.iss}); reported at AIS "
+                f"{MAX_REPORTED_AIS} (ISS {shown.iss}): a dummy measure cannot represent AIS 6",
+                index,
+            )
+        )
+        iss_ci = (min(iss_ci[0], float(shown.iss)), max(iss_ci[1], float(shown.iss)))
+    lateral = abs(pulse.delta_v_lateral_kmh)
+    side = impact.mode in (ImpactMode.NEAR_SIDE, ImpactMode.FAR_SIDE)
+    if side and lateral > SIDE_TESTED_MAX_DELTA_V_KMH:
+        assumptions.append(
+            Assumption(
+                AssumptionCode.SIDE_BEYOND_TESTED_SEVERITY,
+                f"occupants[{index}]: lateral delta-V {lateral:.0f} km/h is above the side "
+                f"crash tests the side occupant models were checked against (up to "
+                f"{SIDE_TESTED_MAX_DELTA_V_KMH:g} km/h): their measures are an extrapolation",
+                index,
+            )
+        )
+    return shown, iss_ci
+
+
 def _lpm_occupant(
     index: int,
     occupant: Occupant,
@@ -350,10 +397,11 @@ def _lpm_occupant(
     # occupant's age (the direct run and the surrogate both use it)
     p0 = zero_load_probability(nominal.measures, occupant.body, occupant.age_years, impact.mode)
     p_ci = (corrected_probability(iv.p_ci[0], p0), corrected_probability(iv.p_ci[1], p0))
+    shown, iss_ci = _reported(index, nominal, impact, pulse, iv.iss_ci, assumptions)
     return _LpmAnswer(
         decision=decide(corrected_probability(iv.p, p0), p_ci, LPM_THRESHOLDS[impact.mode]),
-        iss=IssEstimate(estimate=int(nominal.assessment.iss), ci95=iv.iss_ci),
-        region_ais=dict(nominal.assessment.region_ais),
+        iss=IssEstimate(estimate=shown.iss, ci95=iss_ci),
+        region_ais=shown.region_ais,
         measures=_measures_dict(nominal.measures),
         measures_ci95=iv.measures_ci,
         interval_method=iv.method,

@@ -47,6 +47,7 @@ from service.pages.drawing import (
     probability_bar,
     pulse_plot,
 )
+from service.pages.regions import RISK_REGION_SHAPES, RiskRegionView, physics_skill, risk_regions
 
 __all__ = [
     "AuditView",
@@ -366,10 +367,15 @@ class OccupantView:
     measures: tuple[MeasureRow, ...]
     sensor_text: str
     assumptions: tuple[AssumptionView, ...]
+    risk_regions: tuple[RiskRegionView, ...] = ()
 
     @property
     def region_ais(self) -> dict[str, int]:
         return {r.key: r.ais for r in self.regions}
+
+    @property
+    def region_risk(self) -> dict[str, RiskRegionView]:
+        return {r.key: r for r in self.risk_regions}
 
 
 @dataclass(frozen=True)
@@ -586,6 +592,7 @@ def _occupant_view(
         measures=_measure_rows(occ),
         sensor_text=sensor_text,
         assumptions=tuple(assumptions),
+        risk_regions=risk_regions(occ),
     )
 
 
@@ -776,4 +783,11 @@ def query_string(params: Mapping[str, str | None]) -> str:
 def case_page(record: CaseRecord, *, now: datetime, chrome: Mapping[str, Any]) -> str:
     """The HTML of the case page of a stored case."""
     view = build_case_view(record, now=now)
-    return render("case.html", view=view, body_regions=BODY_REGIONS, **chrome)
+    return render(
+        "case.html",
+        view=view,
+        body_regions=BODY_REGIONS,
+        risk_shapes=RISK_REGION_SHAPES,
+        physics=physics_skill(),
+        **chrome,
+    )

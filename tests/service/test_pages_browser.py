@@ -111,6 +111,8 @@ def chromium() -> Iterator[Any]:
 class Served:
     base: str
     keys: dict[str, str]
+    #: the served process's database (a test may rewrite a stored case in it)
+    database_url: str = ""
     #: name -> the stored case (GET /v1/cases/{id})
     cases: dict[str, dict[str, Any]] = field(default_factory=dict)
 
@@ -146,7 +148,7 @@ def served(chromium: Any, tmp_path_factory: pytest.TempPathFactory) -> Iterator[
     base = f"http://127.0.0.1:{port}"
     try:
         wait_ready(base, server, log, timeout_s=180)  # a cold start on a busy machine
-        out = Served(base=base, keys=keys)
+        out = Served(base=base, keys=keys, database_url=env["AACN_DATABASE_URL"])
         submit = {"Authorization": f"Bearer {keys['submitter']}"}
         audit = {"Authorization": f"Bearer {keys['auditor']}"}
         makers: dict[str, Callable[[], dict[str, Any]]] = {
@@ -277,7 +279,7 @@ def test_the_body_map_marks_the_head_region(served: Served, signed_in: Any) -> N
     page = tab.page
     page.goto(served.url("head-injury"))
     ais = served.cases["head-injury"]["result"]["occupants"][0]["region_ais"]
-    head = page.locator("#occupant-0 svg.bodymap g[data-region=head_neck]")
+    head = page.locator("#occupant-0 svg.bodymap:not(.riskmap) g[data-region=head_neck]")
     assert head.get_attribute("data-ais") == str(ais["head_neck"])
     assert f"ais-{ais['head_neck']}" in (head.get_attribute("class") or "").split()
     assert head.locator("text.ais-label").text_content() == str(ais["head_neck"])
@@ -285,13 +287,85 @@ def test_the_body_map_marks_the_head_region(served: Served, signed_in: Any) -> N
     assert skull.is_visible()
     assert skull.evaluate("e => getComputedStyle(e).fill") != AIS0_FILL
     for region, level in ais.items():
-        shape = page.locator(f"#occupant-0 svg.bodymap g[data-region={region}] > :not(text)")
+        shape = page.locator(
+            f"#occupant-0 svg.bodymap:not(.riskmap) g[data-region={region}] > :not(text)"
+        )
         fill = shape.first.evaluate("e => getComputedStyle(e).fill")
         if region != "external":
             assert (fill == AIS0_FILL) == (level == 0), (region, level, fill)
-    page.locator("#occupant-0 .bodyblock").screenshot(
+    page.locator("#occupant-0 [data-layer=occupant-model]").screenshot(
         path=str(screenshot_dir() / "bodymap-head-injury.png")
     )
+    assert tab.problems == []
+    page.close()
+
+
+#: The "no region risk" fill of report.css.
+RISK_NA_FILL = AIS0_FILL
+
+
+def _store_region_risk(served: Served, name: str, region_risk: dict[str, Any] | None) -> None:
+    """Give a stored case's first occupant a field region risk, in the served database."""
+    import json
+
+    from sqlalchemy import create_engine
+    from sqlalchemy.orm import Session
+
+    from service.db.tables import Case
+
+    engine = create_engine(served.database_url)
+    try:
+        with Session(engine) as session, session.begin():
+            case = session.get(Case, served.cases[name]["case_id"])
+            assert case is not None
+            result = json.loads(json.dumps(case.result))
+            result["occupants"][0]["region_risk"] = region_risk
+            case.result = result
+    finally:
+        engine.dispose()
+
+
+def test_the_body_map_shows_region_risk_first_and_the_physics_layer_labelled(
+    served: Served, signed_in: Any
+) -> None:
+    from tests.service.test_pages_regions import REGION_RISK
+
+    occ = served.cases["head-injury"]["result"]["occupants"][0]
+    given = occ.get("region_risk") or None
+    tab = _tab(signed_in)
+    page = tab.page
+    page.goto(served.url("head-injury"))
+    risk = page.locator("#occupant-0 [data-layer=region-risk]")
+    physics = page.locator("#occupant-0 [data-layer=occupant-model]")
+    assert risk.locator("h4").text_content() == "Body regions at risk: field region risk"
+    assert (physics.locator("h4").text_content() or "").startswith("Occupant model (physics)")
+    skill = physics.locator("p[data-skill]")
+    assert skill.is_visible()
+    assert "real occupants" in (skill.text_content() or "")
+    # the region risk layer comes first
+    assert risk.bounding_box()["y"] < physics.bounding_box()["y"]
+    svg = risk.locator("svg.riskmap")
+    if given is None:  # an engine without the field region models: the page says so
+        assert "unavailable" in (svg.get_attribute("class") or "")
+        assert "No field region risk" in (risk.text_content() or "")
+    _shot(page, "bodymap-layers-" + ("with" if given else "without") + "-region-risk")
+    # the same page with a stored region risk: every region coloured, the interval on hover
+    _store_region_risk(served, "head-injury", given or REGION_RISK)
+    page.goto(served.url("head-injury"))
+    svg = page.locator("#occupant-0 svg.riskmap")
+    assert "unavailable" not in (svg.get_attribute("class") or "")
+    for region, r in (given or REGION_RISK).items():
+        g = svg.locator(f"g[data-region={region}]")
+        fill = g.locator("> :not(title)").first.evaluate("e => getComputedStyle(e).fill")
+        assert (fill == RISK_NA_FILL) == (r["probability"] < 0.01), (region, fill)
+        title = g.locator("title").text_content() or ""
+        assert f"{100 * r['probability_ci95'][0]:.1f} %" in title, title
+        # (the face lies on the head, the spine on the trunk: hover without the hit test)
+        g.locator("> :not(title)").first.hover(force=True)
+    page.locator("#occupant-0 .bodylayers").screenshot(
+        path=str(screenshot_dir() / "bodymap-region-risk-and-physics.png")
+    )
+    _store_region_risk(served, "head-injury", given)  # as it was, for the other tests
     assert tab.problems == []
     page.close()
 
@@ -405,7 +479,8 @@ def test_small_screen_and_print(chromium: Any, served: Served) -> None:
         page.goto(served.url(name))
         width = page.evaluate("[document.documentElement.scrollWidth, window.innerWidth]")
         assert width[0] <= width[1], f"horizontal scroll on a small screen: {width}"
-        assert page.locator("#occupant-0 svg.bodymap").is_visible()
+        assert page.locator("#occupant-0 svg.riskmap").is_visible()
+        assert page.locator("#occupant-0 svg.bodymap:not(.riskmap)").is_visible()
         _shot(page, f"case-{name}-small-screen")
     page.emulate_media(media="print")
     page.goto(served.url("head-injury"))

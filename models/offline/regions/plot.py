@@ -2,18 +2,17 @@
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import numpy as np
 import numpy.typing as npt
+import pandas as pd
 from scipy.special import expit
 
 from models.arrays import FloatArray
-from models.offline.regions.skill import MODES, REGION_SPECS, outcome
-
-if TYPE_CHECKING:
-    from models.offline.regions.report import RegionReport
+from models.offline.regions.calibrate import CalibratedCurve
+from models.offline.regions.skill import MODES, REGION_SPECS, AisSixRow, RegionSkill, outcome
 
 __all__ = ["plot_report"]
 
@@ -32,7 +31,13 @@ def _binned(
     return np.array(centres), np.array(rates), means
 
 
-def plot_report(rep: RegionReport, path: Path) -> None:
+def plot_report(
+    frame: pd.DataFrame,
+    skills: Sequence[RegionSkill],
+    ais_six: Sequence[AisSixRow],
+    curves: Sequence[CalibratedCurve],
+    path: Path,
+) -> None:
     """Four panels: AUC by region and score; AIS 6 by mode; head and thorax curves."""
     import matplotlib
 
@@ -42,7 +47,7 @@ def plot_report(rep: RegionReport, path: Path) -> None:
     fig, ((ax1, ax2), (ax3, ax4)) = plt.subplots(2, 2, figsize=(15, 11))
     ys, labels = [], []
     y0 = 0.0
-    for rs in rep.skills:
+    for rs in skills:
         for s in rs.scores:
             colour = "C3" if s.label == "delta-V alone" else ("C2" if "map" in s.label else "C0")
             ax1.errorbar(
@@ -62,7 +67,7 @@ def plot_report(rep: RegionReport, path: Path) -> None:
     ax1.set_xlabel("AUC, survey-weighted (95 % crash bootstrap)")
     ax1.set_title("occupant models against real region outcomes (red: delta-V; green: map)")
 
-    rows = [r for r in rep.ais_six if r.mode != "all"]
+    rows = [r for r in ais_six if r.mode != "all"]
     x = np.arange(len(rows))
     ax2.bar(x - 0.3, [100 * r.model_ais6 for r in rows], 0.2, label="models' AIS 6 (assessment)")
     ax2.bar(x - 0.1, [100 * r.reported_ais6 for r in rows], 0.2, label="reported AIS 6")
@@ -73,7 +78,6 @@ def plot_report(rep: RegionReport, path: Path) -> None:
     ax2.set_title("head/neck AIS 6 from the occupant models against real AIS 5+")
     ax2.legend(fontsize=8)
 
-    frame = rep.frame
     w = frame["ratwgt"].to_numpy(float)
     for ax, spec_name, measure, published, edges in (
         (ax3, "head", "hic15", "lpm_p_ais3_head_neck", np.geomspace(1, 50000, 16)),
@@ -92,9 +96,7 @@ def plot_report(rep: RegionReport, path: Path) -> None:
             color="C1",
             label="published curves (mean in bin)",
         )
-        curve = next(
-            (c for c in rep.curves if c.region == spec_name and c.measure == measure), None
-        )
+        curve = next((c for c in curves if c.region == spec_name and c.measure == measure), None)
         if curve is not None:
             grid = np.geomspace(edges[0], edges[-1], 200)
             for i, mode in enumerate(m for m in MODES if m in curve.intercepts):

@@ -22,6 +22,7 @@ Run::
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -287,6 +288,40 @@ def _full(rep: RegionReport) -> str:
     )
 
 
+#: The occupant models' measured skill the case page states (shipped with the engine).
+SKILL_PATH: Final[Path] = (
+    Path(__file__).resolve().parents[2] / "injury" / "data" / ("occupant_model_field_skill.json")
+)
+
+
+def skill_document(rep: RegionReport) -> dict[str, object]:
+    """What the case page says of the occupant models' body map, from this report."""
+    regions: dict[str, dict[str, float | str]] = {}
+    for rs in rep.skills:
+        key = rs.spec.risk_region
+        if key not in ("head", "thorax", "abdomen"):
+            continue
+        by = {s.label: s for s in rs.scores}
+        regions[key] = {
+            "ais_level": rs.spec.level,
+            "auc_body_map": round(by["body map: region AIS"].auc.value, 3),
+            "auc_delta_v": round(by["delta-V alone"].auc.value, 3),
+        }
+    six = next(r for r in rep.ais_six if r.mode == "all")
+    return {
+        "generated_by": "python -m models.offline.regions.report",
+        "data": "NASS-CDS 1997-2014 (models/offline/data), occupants an occupant model answers",
+        "occupants": int(len(rep.frame)),
+        "auc_weighted": regions,
+        "curves_ais6": {
+            "share_of_occupants": round(six.model_ais6, 4),
+            "real_mais5": round(six.agree_mais5, 3),
+            "died": round(six.died, 3),
+            "median_iss": six.median_iss,
+        },
+    }
+
+
 def update_doc(text: str, path: Path) -> None:
     """Replace the block between the markers of `path` (appended when absent)."""
     doc = path.read_text(encoding="utf-8")
@@ -312,7 +347,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     rep = run_report(args.region_risk, args.workers)
     args.out.mkdir(parents=True, exist_ok=True)
     (args.out / "regions.md").write_text(_full(rep), encoding="utf-8")
-    plot_report(rep, args.out / "regions.png")
+    plot_report(rep.frame, rep.skills, rep.ais_six, rep.curves, args.out / "regions.png")
+    SKILL_PATH.parent.mkdir(parents=True, exist_ok=True)
+    SKILL_PATH.write_text(json.dumps(skill_document(rep), indent=2) + "\n", encoding="utf-8")
     if not args.no_doc:
         update_doc(block(rep), docs_dir("occupant-models.md"))
     sys.stdout.write(block(rep) + "\n")
