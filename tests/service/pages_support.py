@@ -110,6 +110,15 @@ def head_injury() -> dict[str, Any]:
     return body
 
 
+def near_side_56() -> dict[str, Any]:
+    """Issue 39's case: a 56 km/h near-side crash, the driver's side and curtain airbags
+    deployed (the occupant models' curves put the head/neck at AIS 6)."""
+    body = summary(56.0, 270.0)
+    body["occupants"][0]["side_airbag"] = "deployed"
+    body["occurred_at"] = recent(5)
+    return body
+
+
 def minor() -> dict[str, Any]:
     """8 km/h frontal, belted with airbag: no trauma-center indication."""
     body = summary(8.0, 0.0)

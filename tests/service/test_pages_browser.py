@@ -30,6 +30,7 @@ from tests.service.pages_support import (
     acceleration,
     head_injury,
     minor,
+    near_side_56,
     rear_seat_rollover,
     side_edr,
 )
@@ -157,6 +158,7 @@ def served(chromium: Any, tmp_path_factory: pytest.TempPathFactory) -> Iterator[
             "side-edr": side_edr,
             "rear-seat-rollover": rear_seat_rollover,
             "acceleration": acceleration,
+            "near-side-56": near_side_56,
         }
         for name, make in makers.items():
             r = httpx.post(base + "/v1/cases", json=make(), headers=submit, timeout=60)
@@ -370,6 +372,25 @@ def test_the_body_map_shows_region_risk_first_and_the_physics_layer_labelled(
     page.close()
 
 
+def test_a_56_kmh_near_side_case_shows_no_ais_6_and_says_why(
+    served: Served, signed_in: Any
+) -> None:
+    """Issue 39's case: a 56 km/h near-side crash with the side airbags deployed."""
+    tab = _tab(signed_in)
+    page = tab.page
+    page.goto(served.url("near-side-56"))
+    head = page.locator("#occupant-0 svg.bodymap:not(.riskmap) g[data-region=head_neck]")
+    assert head.get_attribute("data-ais") == "5"
+    capped = page.locator("#occupant-0 li[data-code=occupant_model_ais_capped]")
+    assert capped.is_visible()
+    assert "cannot represent AIS 6" in (capped.text_content() or "")
+    assert page.locator("#occupant-0 li[data-code=side_beyond_tested_severity]").is_visible()
+    assert page.locator("#occupant-0 p[data-skill]").is_visible()
+    _shot(page, "case-near-side-56kmh-side-airbags")
+    assert tab.problems == []
+    page.close()
+
+
 def test_every_case_page_shows_the_stored_numbers(served: Served, signed_in: Any) -> None:
     tab = _tab(signed_in)
     page = tab.page
@@ -422,7 +443,7 @@ def test_the_case_list_filters(served: Served, signed_in: Any) -> None:
     page.select_option("select[name=impact_mode]", "near_side")
     page.click("#filters button[type=submit]")
     page.wait_for_url("**impact_mode=near_side**")
-    assert listed() == [ids["side-edr"]]
+    assert sorted(listed()) == sorted([ids["side-edr"], ids["near-side-56"]])
     _shot(page, "list-filtered-near-side")
     page.click(f"tr[data-case-id='{ids['side-edr']}'] a")
     page.wait_for_url(served.url("side-edr"))

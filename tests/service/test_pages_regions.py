@@ -14,8 +14,8 @@ from typing import Any
 
 from service.db.tables import Case
 from service.pages.regions import RISK_BANDS, SKILL_PATH, physics_skill
-from tests.service.pages_support import Page, head_injury, minor
-from tests.support import ApiClient, post_case, stored_case, summary
+from tests.service.pages_support import Page, head_injury, minor, near_side_56
+from tests.support import ApiClient, post_case, stored_case
 
 #: A field region risk of each region, shaped as the wire gives it (probabilities
 #: chosen to fall in every colour band).
@@ -122,9 +122,7 @@ def test_a_56_kmh_near_side_crash_with_side_airbags_is_never_reported_at_ais_6(
     api: ApiClient,
 ) -> None:
     """The issue's case: head/neck AIS 6 and ISS 75 for a near-side driver with side airbags."""
-    body = summary(56.0, 270.0)
-    body["occupants"][0]["side_airbag"] = "deployed"
-    stored = stored_case(api, post_case(api, body)["case_id"])["result"]
+    stored = stored_case(api, post_case(api, near_side_56())["case_id"])["result"]
     occ = stored["occupants"][0]
     assert occ["impact_mode"] == "near_side"
     assert max(occ["region_ais"].values()) <= 5
