@@ -138,15 +138,17 @@ def _skill_table(rep: RegionReport) -> list[str]:
 def _calibration_table(rep: RegionReport) -> list[str]:
     lines = [
         "| region (outcome) | observed, weighted [95 %] | body map AIS >= 3, weighted share |"
-        " published curves' mean P(AIS 3+) |",
-        "|---|---:|---:|---:|",
+        " share / observed [95 %] | published curves' mean P(AIS 3+) | mean P / observed [95 %] |",
+        "|---|---:|---:|---:|---:|---:|",
     ]
     for rs in rep.skills:
         c = rs.calibration
         curve = "-" if c.curve_mean is None else _pct(c.curve_mean)
         obs = f"{_pct(c.observed.value)} [{_pct(c.observed.low)}, {_pct(c.observed.high)}]"
+        curve_ratio = "-" if c.curve_ratio is None else c.curve_ratio.text("{:.1f}")
         lines.append(
-            f"| {rs.spec.name} (AIS {rs.spec.level}+) | {obs} | {_pct(c.map_share)} | {curve} |"
+            f"| {rs.spec.name} (AIS {rs.spec.level}+) | {obs} | {_pct(c.map_share)} | "
+            f"{c.map_ratio.text('{:.1f}')} | {curve} | {curve_ratio} |"
         )
     return lines
 

@@ -200,6 +200,10 @@ class MapCalibration:
     observed: Interval
     map_share: float
     curve_mean: float | None
+    #: predicted / observed, with the crash-bootstrap interval: the map's AIS >= 3 share
+    #: and the published curves' mean P
+    map_ratio: Interval
+    curve_ratio: Interval | None
 
 
 @dataclass(frozen=True)
@@ -228,6 +232,18 @@ def region_skill(
     if region_risk is not None:
         skills.append(_auc_skill(frame, y, region_risk, spec.name, "region risk"))
     level = frame[spec.map_column].to_numpy(dtype=np.float64)
+    high = (level >= 3).astype(np.float64)
+    curve = None if spec.curve is None else frame[spec.curve].to_numpy(dtype=np.float64)
+
+    def ratio(pred: FloatArray) -> Interval:
+        return boot.interval(
+            lambda ww: (
+                float(np.average(pred, weights=ww) / np.average(y, weights=ww))
+                if np.average(y, weights=ww) > 0
+                else float("nan")
+            )
+        )
+
     cal = MapCalibration(
         region=spec.name,
         observed=boot.interval(lambda ww: float(np.average(y, weights=ww))),
@@ -237,6 +253,8 @@ def region_skill(
             if spec.curve is None
             else float(np.average(frame[spec.curve].to_numpy(dtype=np.float64), weights=w))
         ),
+        map_ratio=ratio(high),
+        curve_ratio=None if curve is None else ratio(curve),
     )
     by_mode: dict[str, dict[str, float]] = {}
     for mode in MODES:
