@@ -31,6 +31,7 @@ from typing import Final
 import numpy as np
 import pandas as pd
 
+from models.notification import AirbagState
 from models.offline.paths import docs_dir
 from models.offline.regions.calibrate import AddedValue, CalibratedCurve, item_five
 from models.offline.regions.rows import KEY_COLUMNS, outcome_frame
@@ -65,6 +66,7 @@ class RegionReport:
         added: list[AddedValue],
         region_risk_given: bool,
         side: list[SideRun],
+        near_side_bags: AisSixRow,
     ) -> None:
         self.frame = frame
         self.skills = skills
@@ -73,6 +75,7 @@ class RegionReport:
         self.added = added
         self.region_risk_given = region_risk_given
         self.side = side
+        self.near_side_bags = near_side_bags
 
 
 def _region_risk(frame: pd.DataFrame, path: Path | None) -> dict[str, pd.Series]:
@@ -99,6 +102,13 @@ def run_report(
         for spec in REGION_SPECS
     ]
     curves, added = item_five(frame)
+    bags = analysis_frame(
+        physics_table(side_airbag=AirbagState.DEPLOYED, workers=workers, progress=progress),
+        outcome_frame(),
+    )
+    near_bags = next(
+        r for r in ais_six_check(bags, "reported_ais_head_neck") if r.mode == "near_side"
+    )
     return RegionReport(
         frame=frame,
         skills=skills,
@@ -107,6 +117,7 @@ def run_report(
         added=added,
         region_risk_given=bool(risks),
         side=side_runs(),
+        near_side_bags=near_bags,
     )
 
 
@@ -173,6 +184,18 @@ def _mode_table(rep: RegionReport) -> list[str]:
     return lines
 
 
+def _ais_six_row(r: AisSixRow, label: str) -> str:
+    agree = (
+        f"{_pct(r.agree_mais5)} / {_pct(r.died)} / {r.median_iss:.0f}"
+        if np.isfinite(r.agree_mais5)
+        else "-"
+    )
+    return (
+        f"| {label} | {r.n:,} | {_pct(r.model_ais6)} | {_pct(r.reported_ais6)} | "
+        f"{_pct(r.reported_ais5)} | {_pct(r.real_mais5)} | {_pct(r.real_head5)} | {agree} |"
+    )
+
+
 def _ais_six_table(rep: RegionReport) -> list[str]:
     lines = [
         "| mode | occupants | models' head/neck AIS 6 (assessment) | reported AIS 6 |"
@@ -180,16 +203,10 @@ def _ais_six_table(rep: RegionReport) -> list[str]:
         " of the models' AIS 6: real MAIS 5+ / died / median ISS |",
         "|---|---:|---:|---:|---:|---:|---:|---:|",
     ]
-    for r in rep.ais_six:
-        agree = (
-            f"{_pct(r.agree_mais5)} / {_pct(r.died)} / {r.median_iss:.0f}"
-            if np.isfinite(r.agree_mais5)
-            else "-"
-        )
-        lines.append(
-            f"| {r.mode} | {r.n:,} | {_pct(r.model_ais6)} | {_pct(r.reported_ais6)} | "
-            f"{_pct(r.reported_ais5)} | {_pct(r.real_mais5)} | {_pct(r.real_head5)} | {agree} |"
-        )
+    lines += [_ais_six_row(r, r.mode) for r in rep.ais_six]
+    lines.append(
+        _ais_six_row(rep.near_side_bags, "near_side, side airbags taken as deployed (what-if)")
+    )
     return lines
 
 
