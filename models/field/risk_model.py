@@ -1,0 +1,476 @@
+"""The field risk models at request time: P(ISS 15+), region AIS 3+ and P(anyone ISS 15+).
+
+Fitted offline on NASS-CDS 1997-2014 (:mod:`models.offline.field.risk_fit`,
+``aacn-triage fit-field``; model card ``docs/field/MODEL_CARD.md``), served
+with numpy only. One artifact holds several outcome models of one form::
+
+    eta = x' beta                  (ranking fit, x: design columns the outcome kept)
+    logit P = a + b eta            (recalibration with the national weights)
+
+for ``iss15`` (the decision) and ``region_<region>`` (AIS 3+ in each body
+region, AIS 2+ where the artifact says so), plus the vehicle answer::
+
+    logit P(anyone ISS 15+) = a_v + b_v logit(1 - prod_i (1 - P_i(ISS 15+)))
+
+recalibrated on held-out vehicles. The 95 % intervals are the spread of the
+calibrated logit over bootstrap refits by crash stored in the artifact,
+``expit(eta -/+ z sd)`` around the point estimate.
+
+The artifact carries the checksum of its content and of the code that builds
+its features (:mod:`models.field.risk_features`); a tampered or stale artifact
+is refused at load.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
+from typing import Any, Final
+
+import numpy as np
+
+from models.arrays import FloatArray
+from models.codehash import source_tree_sha256
+from models.constants import Z_95
+from models.field.risk_features import (
+    ALL_COLUMNS,
+    RiskImputation,
+    RiskInputs,
+    crash_mode_codes,
+    design_columns,
+    inputs_arrays,
+)
+
+__all__ = [
+    "ARTIFACT_SCHEMA",
+    "OUTCOME",
+    "REGION_NAMES",
+    "OutcomeModel",
+    "RegionRisk",
+    "RiskModel",
+    "RiskPrediction",
+    "VehicleRisk",
+    "canonical_content_sha256",
+    "default_artifact_path",
+    "feature_code_sha256",
+    "load_default",
+]
+
+#: Identifier of the artifact layout written by the offline fit.
+ARTIFACT_SCHEMA: Final[str] = "aacn-triage/field-risk/1"
+
+#: The decision's outcome: ISS 15+ (ISS >= 16 in NASS-CDS), the trauma-center criterion.
+OUTCOME: Final[str] = "ISS15+"
+
+#: Body regions of the region risks, in order (AIS 1990 regions).
+REGION_NAMES: Final[tuple[str, ...]] = (
+    "head",
+    "face",
+    "neck",
+    "thorax",
+    "abdomen",
+    "spine",
+    "upper_extremity",
+    "lower_extremity",
+)
+
+_ARTIFACT_FILE: Final[str] = "field_iss15.json"
+_FEATURE_SOURCES: Final[tuple[str, ...]] = ("field/risk_features.py",)
+
+
+@lru_cache(maxsize=1)
+def feature_code_sha256() -> str:
+    """Checksum of the normalised code that builds the features."""
+    root = Path(__file__).resolve().parents[1]
+    return source_tree_sha256([root / rel for rel in _FEATURE_SOURCES])
+
+
+def canonical_content_sha256(doc: Mapping[str, Any]) -> str:
+    """SHA-256 of an artifact document without its ``content_sha256`` (canonical JSON)."""
+    body = {k: v for k, v in doc.items() if k != "content_sha256"}
+    text = json.dumps(body, sort_keys=True, separators=(",", ":"), allow_nan=False)
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+class _ArtifactError(ValueError):
+    pass
+
+
+def _get(obj: Any, key: str) -> Any:
+    if not isinstance(obj, dict) or key not in obj:
+        raise _ArtifactError(f"missing `{key}`")
+    return obj[key]
+
+
+def _matrix(value: Any, shape: tuple[int, ...], where: str) -> FloatArray:
+    arr = np.array(value, dtype=np.float64)
+    ok = arr.ndim == len(shape) and all(
+        s in (-1, a) for s, a in zip(shape, arr.shape, strict=False)
+    )
+    if not ok or not np.all(np.isfinite(arr)):
+        raise _ArtifactError(f"`{where}` must be finite numbers of shape {shape}")
+    arr.setflags(write=False)
+    return arr
+
+
+def _expit(x: FloatArray) -> FloatArray:
+    out: FloatArray = 0.5 * (1.0 + np.tanh(0.5 * x))
+    return out
+
+
+@dataclass(frozen=True, eq=False)
+class OutcomeModel:
+    """One outcome's fitted model.
+
+    Attributes
+    ----------
+    name, label : str
+        e.g. ``region_head``, ``head AIS3+``.
+    ais_level : int or None
+    columns : tuple of int
+        Indices into :data:`models.field.risk_features.ALL_COLUMNS`.
+    beta : ndarray, shape (k,)
+    calibration : ndarray, shape (2,)
+        ``(a, b)``.
+    bootstrap_beta : ndarray, shape (B, k)
+    bootstrap_calibration : ndarray, shape (B, 2)
+    """
+
+    name: str
+    label: str
+    ais_level: int | None
+    columns: tuple[int, ...]
+    beta: FloatArray
+    calibration: FloatArray
+    bootstrap_beta: FloatArray
+    bootstrap_calibration: FloatArray
+
+    def logits(self, x_all: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Calibrated logit (n,) and its bootstrap refits (n, B) of full design rows (n, K)."""
+        x = x_all[:, list(self.columns)]
+        eta = self.calibration[0] + self.calibration[1] * (x @ self.beta)
+        boot = self.bootstrap_calibration[:, 0] + self.bootstrap_calibration[:, 1] * (
+            x @ self.bootstrap_beta.T
+        )
+        return eta, boot
+
+
+def _interval(eta: float, boot: FloatArray) -> tuple[float, float, float, float]:
+    """Probability, 95 % interval (holding it) and logit sd."""
+    sd = float(np.std(boot, ddof=1))
+    p = float(_expit(np.array(eta)))
+    lo = float(_expit(np.array(eta - Z_95 * sd)))
+    hi = float(_expit(np.array(eta + Z_95 * sd)))
+    return p, min(lo, p), max(hi, p), sd
+
+
+@dataclass(frozen=True)
+class RegionRisk:
+    """P(AIS `ais_level`+ injury in one body region) of one occupant.
+
+    Attributes
+    ----------
+    probability : float
+    ci95 : (float, float)
+    ais_level : int
+        3, or 2 where AIS 3+ is too rare in the data (named in the answer).
+    """
+
+    probability: float
+    ci95: tuple[float, float]
+    ais_level: int
+
+
+@dataclass(frozen=True, eq=False)
+class RiskPrediction:
+    """The field risk models' answer for one occupant.
+
+    Attributes
+    ----------
+    probability : float
+        P(ISS 15+).
+    ci95 : (float, float)
+    logit, logit_sd : float
+    mode : str
+        ``frontal``, ``near_side``, ``far_side``, ``rear`` or ``rollover``.
+    imputed : tuple of str
+        Inputs that were unknown and imputed.
+    extrapolated : bool
+        Delta-V above the largest of the data.
+    regions : Mapping[str, RegionRisk]
+        Every region of :data:`REGION_NAMES`.
+    bootstrap_probability : ndarray, shape (B,)
+        P(ISS 15+) of each bootstrap refit (for the vehicle answer's interval).
+    """
+
+    probability: float
+    ci95: tuple[float, float]
+    logit: float
+    logit_sd: float
+    mode: str
+    imputed: tuple[str, ...]
+    extrapolated: bool
+    regions: Mapping[str, RegionRisk]
+    bootstrap_probability: FloatArray
+
+
+@dataclass(frozen=True)
+class VehicleRisk:
+    """P(anyone in the vehicle ISS 15+) with its 95 % interval."""
+
+    probability: float
+    ci95: tuple[float, float]
+
+
+def _mode(f: RiskInputs) -> str:
+    if f.rollover:
+        return "rollover"
+    near, far, rear = (
+        float(v[0]) for v in crash_mode_codes(np.array([f.pdof_deg]), [f.seat_side.value])
+    )
+    if near:
+        return "near_side"
+    if far:
+        return "far_side"
+    return "rear" if rear else "frontal"
+
+
+@dataclass(frozen=True, eq=False)
+class RiskModel:
+    """The fitted field risk models (immutable). Build with :meth:`from_artifact`.
+
+    Attributes
+    ----------
+    name, version, sha256, outcome : str
+    decision : OutcomeModel
+        ISS 15+.
+    regions : Mapping[str, OutcomeModel]
+    vehicle_calibration : ndarray, shape (2,)
+    vehicle_bootstrap_calibration : ndarray, shape (B, 2)
+    imputation : RiskImputation
+    delta_v_max_kmh : float
+    thresholds : Mapping[str, float]
+        Operating point name -> threshold on P(ISS 15+).
+    operating_point_descriptions : Mapping[str, str]
+    default_operating_point : str
+    document : Mapping[str, Any]
+    """
+
+    name: str
+    version: str
+    sha256: str
+    outcome: str
+    decision: OutcomeModel
+    regions: Mapping[str, OutcomeModel]
+    vehicle_calibration: FloatArray
+    vehicle_bootstrap_calibration: FloatArray
+    imputation: RiskImputation
+    delta_v_max_kmh: float
+    thresholds: Mapping[str, float]
+    operating_point_descriptions: Mapping[str, str]
+    default_operating_point: str
+    document: Mapping[str, Any]
+
+    @classmethod
+    def from_artifact(cls, path: str | Path) -> RiskModel:
+        """Load, verify and validate an artifact.
+
+        Raises
+        ------
+        ValueError
+            Not the schema, malformed, tampered or stale.
+        OSError
+            The file cannot be read.
+        """
+        p = Path(path)
+        try:
+            return cls._from_bytes(p.read_bytes())
+        except _ArtifactError as exc:
+            raise ValueError(f"field risk artifact {p}: {exc}") from None
+
+    @classmethod
+    def from_document(cls, doc: Mapping[str, Any]) -> RiskModel:
+        """Load and verify a document not yet written (the offline fit's)."""
+        raw = json.dumps(doc, indent=1, allow_nan=False).encode()
+        try:
+            return cls._from_bytes(raw)
+        except _ArtifactError as exc:
+            raise ValueError(f"field risk document: {exc}") from None
+
+    @staticmethod
+    def _outcome(name: str, od: Any) -> OutcomeModel:
+        names = list(_get(od, "columns"))
+        if not names or names[0] != "intercept" or not set(names) <= set(ALL_COLUMNS):
+            raise _ArtifactError(f"outcome {name!r}: `columns` must be known, intercept first")
+        k = len(names)
+        beta = _matrix(_get(od, "coefficients"), (k,), f"{name}.coefficients")
+        boot = _matrix(_get(od, "bootstrap_coefficients"), (-1, k), f"{name}.bootstrap")
+        cal = _matrix(_get(od, "calibration"), (2,), f"{name}.calibration")
+        bcal = _matrix(_get(od, "bootstrap_calibration"), (boot.shape[0], 2), f"{name}.bcal")
+        if boot.shape[0] < 2:
+            raise _ArtifactError(f"outcome {name!r}: at least 2 bootstrap refits")
+        level = od.get("ais_level")
+        return OutcomeModel(
+            name=name,
+            label=str(_get(od, "label")),
+            ais_level=None if level is None else int(level),
+            columns=tuple(ALL_COLUMNS.index(c) for c in names),
+            beta=beta,
+            calibration=cal,
+            bootstrap_beta=boot,
+            bootstrap_calibration=bcal,
+        )
+
+    @classmethod
+    def _from_bytes(cls, raw: bytes) -> RiskModel:
+        try:
+            doc = json.loads(raw.decode("utf-8"))
+        except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+            raise _ArtifactError(f"not valid UTF-8 JSON ({exc})") from None
+        if not isinstance(doc, dict) or doc.get("schema") != ARTIFACT_SCHEMA:
+            raise _ArtifactError(f"`schema` must be {ARTIFACT_SCHEMA!r}")
+        if _get(doc, "content_sha256") != canonical_content_sha256(doc):
+            raise _ArtifactError("content checksum mismatch (the artifact was altered)")
+        if _get(doc, "feature_code_sha256") != feature_code_sha256():
+            raise _ArtifactError(
+                "stale: fitted for other feature code; run `aacn-triage fit-field`"
+            )
+        if tuple(_get(doc, "candidate_columns")) != ALL_COLUMNS:
+            raise _ArtifactError("`candidate_columns` differ from the feature code's")
+        outs = _get(doc, "outcomes")
+        decision = cls._outcome("iss15", _get(outs, "iss15"))
+        regions = {r: cls._outcome(f"region_{r}", _get(outs, f"region_{r}")) for r in REGION_NAMES}
+        veh = _get(doc, "vehicle")
+        vcal = _matrix(_get(veh, "calibration"), (2,), "vehicle.calibration")
+        vboot = _matrix(
+            _get(veh, "bootstrap_calibration"),
+            (decision.bootstrap_beta.shape[0], 2),
+            "vehicle.bcal",
+        )
+        imp = _get(doc, "imputation")
+        imputation = RiskImputation(
+            **{k: float(_get(imp, k)) for k in RiskImputation.__dataclass_fields__}
+        )
+        points = _get(doc, "operating_points")
+        thresholds = {str(n): float(_get(op, "threshold")) for n, op in points.items()}
+        if not all(0.0 < t < 1.0 for t in thresholds.values()):
+            raise _ArtifactError("operating point thresholds must be in (0, 1)")
+        default = _get(doc, "default_operating_point")
+        if default not in thresholds:
+            raise _ArtifactError(f"default operating point {default!r} is not defined")
+        model = _get(doc, "model")
+        return cls(
+            name=str(_get(model, "name")),
+            version=str(_get(model, "version")),
+            sha256=hashlib.sha256(raw).hexdigest(),
+            outcome=str(_get(doc, "outcome")),
+            decision=decision,
+            regions=regions,
+            vehicle_calibration=vcal,
+            vehicle_bootstrap_calibration=vboot,
+            imputation=imputation,
+            delta_v_max_kmh=float(_get(_get(doc, "data"), "delta_v_max_kmh")),
+            thresholds=thresholds,
+            operating_point_descriptions={
+                str(n): str(_get(op, "description")) for n, op in points.items()
+            },
+            default_operating_point=str(default),
+            document=doc,
+        )
+
+    def design(
+        self, inputs: Sequence[RiskInputs]
+    ) -> tuple[FloatArray, tuple[tuple[str, ...], ...]]:
+        """Full design rows (n, K) of `inputs` and the inputs imputed per occupant."""
+        arrays, imputed = inputs_arrays(inputs, self.imputation)
+        return design_columns(arrays), imputed
+
+    def predict_many(self, inputs: Sequence[RiskInputs]) -> list[RiskPrediction]:
+        """Every occupant's answer (vectorised over occupants).
+
+        Raises
+        ------
+        ValueError
+            Delta-V or age out of range (naming the field).
+        """
+        if not inputs:
+            return []
+        x, imputed = self.design(inputs)
+        eta, boot = self.decision.logits(x)
+        region_logits = {r: m.logits(x) for r, m in self.regions.items()}
+        out = []
+        for i, f in enumerate(inputs):
+            p, lo, hi, sd = _interval(float(eta[i]), boot[i])
+            regions = {}
+            for r, (e, b) in region_logits.items():
+                rp, rlo, rhi, _ = _interval(float(e[i]), b[i])
+                level = self.regions[r].ais_level
+                regions[r] = RegionRisk(rp, (rlo, rhi), 3 if level is None else level)
+            out.append(
+                RiskPrediction(
+                    probability=p,
+                    ci95=(lo, hi),
+                    logit=float(eta[i]),
+                    logit_sd=sd,
+                    mode=_mode(f),
+                    imputed=imputed[i],
+                    extrapolated=f.delta_v_kmh > self.delta_v_max_kmh,
+                    regions=regions,
+                    bootstrap_probability=_expit(boot[i]),
+                )
+            )
+        return out
+
+    def predict(self, inputs: RiskInputs) -> RiskPrediction:
+        """One occupant's answer (:meth:`predict_many` of one)."""
+        return self.predict_many([inputs])[0]
+
+    def vehicle(self, predictions: Sequence[RiskPrediction]) -> VehicleRisk:
+        """P(anyone in the vehicle ISS 15+) from its occupants' answers.
+
+        Raises
+        ------
+        ValueError
+            No occupant.
+        """
+        if not predictions:
+            raise ValueError("the vehicle answer needs at least one occupant")
+
+        def z(ps: Sequence[FloatArray]) -> FloatArray:
+            none = np.sum([np.log1p(-np.clip(p, 0.0, 1.0 - 1e-12)) for p in ps], axis=0)
+            q = np.clip(-np.expm1(none), 1e-9, 1.0 - 1e-9)
+            out: FloatArray = np.log(q / (1.0 - q))
+            return out
+
+        z0 = float(z([np.array(p.probability) for p in predictions]))
+        zb = z([p.bootstrap_probability for p in predictions])
+        eta = float(self.vehicle_calibration[0] + self.vehicle_calibration[1] * z0)
+        boot = (
+            self.vehicle_bootstrap_calibration[:, 0] + self.vehicle_bootstrap_calibration[:, 1] * zb
+        )
+        p, lo, hi, _ = _interval(eta, boot)
+        return VehicleRisk(p, (lo, hi))
+
+    def threshold(self, operating_point: str | None = None) -> float:
+        """Decision threshold on P(ISS 15+) (default: the artifact's operating point).
+
+        Raises
+        ------
+        KeyError
+            An operating point the artifact does not define.
+        """
+        return self.thresholds[operating_point or self.default_operating_point]
+
+
+def default_artifact_path() -> Path:
+    """The shipped artifact, ``models/field/artifacts/field_iss15.json``."""
+    return Path(__file__).resolve().parent / "artifacts" / _ARTIFACT_FILE
+
+
+def load_default() -> RiskModel:
+    """Load and verify the shipped artifact."""
+    return RiskModel.from_artifact(default_artifact_path())

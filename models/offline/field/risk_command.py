@@ -1,0 +1,61 @@
+"""``aacn-triage fit-field``: fit the field risk models, write the artifact and the model card.
+
+Shows progress (tqdm) and caches each stage (``--cache``, default
+``.cache/fit-field``): an interrupted fit re-run with the same settings resumes
+at the stage it stopped in.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+
+from models.field.risk_model import default_artifact_path
+from models.offline.field.risk_fit import RiskConfig
+from models.offline.field.risk_run import fit_risk
+
+__all__ = ["main", "write_risk_artifact"]
+
+
+def write_risk_artifact(doc: dict[str, object], path: Path | None = None) -> Path:
+    """Write the artifact document (indented JSON, LF) and return its path."""
+    out = default_artifact_path() if path is None else path
+    out.parent.mkdir(parents=True, exist_ok=True)
+    out.write_text(json.dumps(doc, indent=1, allow_nan=False) + "\n", encoding="utf-8")
+    return out
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """``aacn-triage fit-field``: fit, write the artifact and the model card."""
+    from models.offline.field.risk_report import default_report_dir, write_risk_model_card
+
+    parser = argparse.ArgumentParser(
+        prog="aacn-triage fit-field", description=__doc__.split("\n")[0]
+    )
+    parser.add_argument("--out", type=Path, default=None, help="report directory (docs/field)")
+    parser.add_argument("--artifact", type=Path, default=None, help="artifact path (shipped)")
+    parser.add_argument(
+        "--cache", type=Path, default=Path(".cache/fit-field"), help="stage cache directory"
+    )
+    parser.add_argument("--no-cache", action="store_true", help="recompute every stage")
+    parser.add_argument(
+        "--quick", action="store_true", help="a fifth of the crashes, few refits (a smoke run)"
+    )
+    args = parser.parse_args(argv)
+    cfg = (
+        RiskConfig(subsample=0.2, n_bootstrap=5, n_metric_bootstrap=30, n_splits=3)
+        if args.quick
+        else RiskConfig()
+    )
+    fit = fit_risk(cfg, cache_dir=None if args.no_cache else args.cache)
+    path = write_risk_artifact(fit.artifact, args.artifact)
+    card = write_risk_model_card(fit, args.out or default_report_dir())
+    sys.stderr.write(f"artifact: {path}\nmodel card: {card}\n")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())

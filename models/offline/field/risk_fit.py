@@ -1,0 +1,402 @@
+"""Fit the field risk models on NASS-CDS 1997-2014 and measure them held out by crash.
+
+``aacn-triage fit-field`` (:mod:`.risk_command`) runs :func:`fit_risk`, one
+generic fitter of "field-calibrated probability of a binary outcome from
+notification fields" used for ISS 15+ per occupant (the decision), each body
+region's AIS 3+ (AIS 2+ where too rare) and, from the ISS 15+ model, P(anyone
+in the vehicle ISS 15+):
+
+1. **Population and inputs** (:mod:`.occupants`, :mod:`.risk_data`): adults in
+   seats a notification can name, every notification field the file holds,
+   as :func:`models.field.risk_features.design_columns` builds it.
+2. **Folds by crash**: every crash (year, psu, caseno) in one fold.
+3. **Model**: an L2-penalised logistic regression with splines of delta-V and
+   age and delta-V slopes by crash mode and belt (the ranking fit, unweighted),
+   then ``logit P = a + b eta`` fitted with the national weights ``ratwgt``
+   (the probability means "of such occupants in US towaway crashes"). The
+   penalty is chosen by cross-validated log loss; each input group is kept only
+   if dropping it raises the cross-validated log loss (one backward pass, per
+   outcome).
+4. **Fleet drift**: candidate treatments (accident-year term served at the
+   latest year; none; intercept recalibrated on the latest years; both) are
+   chosen on an inner temporal split (fit to 2006, test 2007-2010, weighted
+   log loss), then shown on the outer one (fit to 2010, test 2011-2014).
+5. **Operating points** on the held-out (out-of-fold) probabilities: the
+   default finds >= 85 % of the ISS 15+ occupants; ``acs_cot`` keeps
+   under-triage <= 5 %.
+6. **Intervals**: bootstrap refits by crash of the whole fit (stored in the
+   artifact: the service's 95 % interval is their logit spread); figures get
+   bootstrap-by-crash intervals over the held-out predictions.
+
+The stages cache their results (``--cache``), so an interrupted fit resumes.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import pickle
+from collections.abc import Callable, Sequence
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any, Final, TypeVar
+
+import numpy as np
+import pandas as pd
+from tqdm import tqdm
+
+from models.arrays import FloatArray, IntArray
+from models.field.risk_features import (
+    ALL_COLUMNS,
+    FEATURE_GROUPS,
+    RiskImputation,
+    design_columns,
+)
+from models.offline.field.occupants import crash_keys, fit_population, load_occupants
+from models.offline.field.risk_core import Fitted, expit, fit_model, logit
+from models.offline.field.risk_data import Outcome, outcomes, population_imputation, risk_arrays
+
+__all__ = [
+    "DRIFT_VARIANTS",
+    "RiskConfig",
+    "RiskData",
+    "load_risk_data",
+]
+
+T = TypeVar("T")
+
+#: Fleet-drift treatments: (name, accident-year term, intercept recalibrated on
+#: the latest `latest_years` of the training years).
+DRIFT_VARIANTS: Final[tuple[tuple[str, bool, bool], ...]] = (
+    ("year_term", True, False),
+    ("none", False, False),
+    ("latest_years", False, True),
+    ("year_term_latest_years", True, True),
+)
+
+
+@dataclass(frozen=True)
+class RiskConfig:
+    """Settings of a fit (recorded in the artifact).
+
+    Attributes
+    ----------
+    n_splits : int
+        Folds by crash.
+    seed : int
+    c_grid : tuple of float
+        Inverse L2 strengths tried (standardised columns).
+    n_bootstrap : int
+        Bootstrap refits by crash stored in the artifact.
+    n_metric_bootstrap : int
+        Resamples (by crash) for the figures' intervals.
+    sensitivity : float
+        Of the default operating point.
+    acs_cot_sensitivity : float
+        ACS-COT: under-triage <= 5 %.
+    temporal_cut, inner_cut : int
+        Last accident year fitted in the outer and inner temporal checks.
+    latest_years : int
+        Years of the latest-years recalibration.
+    subsample : float
+        Share of crashes used (1.0; smaller for the tests' reduced fits).
+    """
+
+    n_splits: int = 5
+    seed: int = 20261206
+    c_grid: tuple[float, ...] = (0.1, 1.0, 10.0)
+    n_bootstrap: int = 40
+    n_metric_bootstrap: int = 200
+    sensitivity: float = 0.85
+    acs_cot_sensitivity: float = 0.95
+    temporal_cut: int = 2010
+    inner_cut: int = 2006
+    latest_years: int = 4
+    subsample: float = 1.0
+
+    def key(self) -> str:
+        """Short hash of the settings (the cache's key)."""
+        text = json.dumps(asdict(self), sort_keys=True)
+        return hashlib.sha256(text.encode()).hexdigest()[:12]
+
+
+@dataclass
+class RiskData:
+    """The fitted population as arrays.
+
+    Attributes
+    ----------
+    rows : pandas.DataFrame
+    removed : tuple of (str, int)
+    imputation : RiskImputation
+    x : ndarray, shape (n, len(ALL_COLUMNS))
+    w : ndarray, shape (n,)
+        ``ratwgt``.
+    crash, vehicle : ndarray of int, shape (n,)
+    year : ndarray, shape (n,)
+    outcomes : list of Outcome
+    mode : ndarray of str, shape (n,)
+        ``frontal``, ``near_side``, ``far_side``, ``rear``, ``rollover``.
+    """
+
+    rows: pd.DataFrame
+    removed: tuple[tuple[str, int], ...]
+    imputation: RiskImputation
+    x: FloatArray
+    w: FloatArray
+    crash: IntArray
+    vehicle: IntArray
+    year: FloatArray
+    outcomes: list[Outcome]
+    mode: np.ndarray = field(repr=False)
+
+    def column(self, name: str) -> FloatArray:
+        """One design column by name."""
+        out: FloatArray = self.x[:, ALL_COLUMNS.index(name)]
+        return out
+
+
+def _mode_labels(x: FloatArray) -> np.ndarray:
+    col = {n: x[:, i] for i, n in enumerate(ALL_COLUMNS)}
+    mode = np.full(x.shape[0], "frontal", dtype=object)
+    mode[col["rear"] > 0] = "rear"
+    mode[col["far_side"] > 0] = "far_side"
+    mode[col["near_side"] > 0] = "near_side"
+    mode[col["rollover"] > 0] = "rollover"
+    return mode
+
+
+def load_risk_data(subsample: float = 1.0, seed: int = 0) -> RiskData:
+    """The fitted population, its design and outcomes (a share of crashes if `subsample` < 1)."""
+    pop = fit_population(load_occupants())
+    rows = pop.rows
+    if subsample < 1.0:
+        crash = crash_keys(rows)
+        keep = np.random.default_rng(seed).random(crash.max() + 1) < subsample
+        rows = rows[keep[crash]].reset_index(drop=True)
+    imputation = population_imputation(rows)
+    x = design_columns(risk_arrays(rows, imputation))  # type: ignore[arg-type]
+    crash = crash_keys(rows)
+    vehicle, _ = pd.factorize(crash.astype(str) + ":" + rows["vehno"].astype(str))
+    return RiskData(
+        rows=rows,
+        removed=pop.removed,
+        imputation=imputation,
+        x=x,
+        w=rows["ratwgt"].to_numpy(dtype=np.float64),
+        crash=crash,
+        vehicle=np.asarray(vehicle),
+        year=rows["year"].to_numpy(dtype=np.float64),
+        outcomes=outcomes(rows),
+        mode=_mode_labels(x),
+    )
+
+
+# ------------------------------------------------------------------ the cache
+
+
+class _Cache:
+    """Pickled stage results under a directory, keyed by the config (resumable fits)."""
+
+    def __init__(self, root: Path | None, key: str) -> None:
+        self.root = None if root is None else root / key
+        if self.root is not None:
+            self.root.mkdir(parents=True, exist_ok=True)
+
+    def get(self, name: str, compute: Callable[[], T]) -> T:
+        if self.root is None:
+            return compute()
+        path = self.root / f"{name}.pkl"
+        if path.is_file():
+            with path.open("rb") as fh:
+                return pickle.load(fh)
+        value = compute()
+        tmp = path.with_suffix(".tmp")
+        with tmp.open("wb") as fh:
+            pickle.dump(value, fh)
+        tmp.replace(path)
+        return value
+
+
+# ------------------------------------------------------------------ columns
+
+
+def group_columns(groups: Sequence[str]) -> list[int]:
+    """Design column indices of the intercept and `groups`."""
+    names = {c for g in groups for c in FEATURE_GROUPS[g]}
+    return [0] + [i for i, n in enumerate(ALL_COLUMNS) if n in names]
+
+
+def _drift(name: str) -> tuple[bool, bool]:
+    for n, year_term, latest in DRIFT_VARIANTS:
+        if n == name:
+            return year_term, latest
+    raise KeyError(name)
+
+
+def _groups_for(groups: Sequence[str], drift: str) -> list[str]:
+    year_term, _ = _drift(drift)
+    out = [g for g in groups if g != "accident_year"]
+    return out + (["accident_year"] if year_term else [])
+
+
+# ------------------------------------------------------------------ fits
+
+
+@dataclass(frozen=True)
+class Spec:
+    """What one outcome's model is: its groups, penalty and drift treatment."""
+
+    groups: tuple[str, ...]
+    c: float
+    drift: str
+
+
+def fit_spec(d: RiskData, y: FloatArray, rows: IntArray, spec: Spec, config: RiskConfig) -> Fitted:
+    """Fit `spec` on `rows` (ranking fit and weighted recalibration)."""
+    _, latest = _drift(spec.drift)
+    cal = None
+    if latest:
+        last = d.year[rows].max()
+        cal = d.year[rows] > last - config.latest_years
+    return fit_model(d.x[rows], y[rows], d.w[rows], group_columns(spec.groups), spec.c, cal)
+
+
+def served_x(d: RiskData, rows: IntArray, reference_year: float) -> FloatArray:
+    """Design rows as served: the accident year set to the reference (latest fitted) year."""
+    x = d.x[rows].copy()
+    x[:, ALL_COLUMNS.index("accident_year")] = reference_year
+    return x
+
+
+def oof_probability(
+    d: RiskData,
+    y: FloatArray,
+    spec: Spec,
+    folds: Sequence[tuple[IntArray, IntArray]],
+    config: RiskConfig,
+) -> tuple[FloatArray, FloatArray]:
+    """Held-out (out-of-fold) calibrated probability and ranking logit, each shape (n,).
+
+    The test fold is scored at its own accident year (random folds span all years).
+    """
+    p = np.empty(y.size)
+    eta = np.empty(y.size)
+    for tr, te in folds:
+        f = fit_spec(d, y, tr, spec, config)
+        p[te] = f.probability(d.x[te])
+        eta[te] = f.eta(d.x[te])
+    return p, eta
+
+
+def log_loss(y: FloatArray, p: FloatArray, w: FloatArray | None = None) -> float:
+    """Mean negative log likelihood (weighted if `w`)."""
+    q = np.clip(p, 1e-12, 1.0 - 1e-12)
+    ll = -(y * np.log(q) + (1.0 - y) * np.log(1.0 - q))
+    return float(np.average(ll, weights=w))
+
+
+def select_spec(
+    d: RiskData,
+    y: FloatArray,
+    folds: Sequence[tuple[IntArray, IntArray]],
+    config: RiskConfig,
+    drift: str,
+    progress: tqdm | None = None,
+) -> tuple[Spec, dict[str, Any]]:
+    """Penalty by CV log loss, then one backward pass over the input groups.
+
+    Returns
+    -------
+    Spec
+    dict
+        ``c_loss`` (penalty -> CV log loss), ``drop_loss`` (group -> CV log loss
+        rise when dropped; negative: dropped), ``full_loss``.
+    """
+    groups = _groups_for(tuple(FEATURE_GROUPS), drift)
+    c_loss = {}
+    for c in config.c_grid:
+        p, _ = oof_probability(d, y, Spec(tuple(groups), c, drift), folds, config)
+        c_loss[c] = log_loss(y, p)
+        if progress is not None:
+            progress.update()
+    c_best = min(c_loss, key=lambda c: c_loss[c])
+    full = c_loss[c_best]
+    rise = {}
+    for g in groups:
+        if g == "delta_v":
+            continue
+        keep = tuple(h for h in groups if h != g)
+        p, _ = oof_probability(d, y, Spec(keep, c_best, drift), folds, config)
+        rise[g] = log_loss(y, p) - full
+        if progress is not None:
+            progress.update()
+    kept = tuple(g for g in groups if g == "delta_v" or rise[g] > 0.0)
+    return Spec(kept, c_best, drift), {"c_loss": c_loss, "drop_loss": rise, "full_loss": full}
+
+
+def temporal_probability(
+    d: RiskData, y: FloatArray, spec: Spec, cut: int, lo: int, hi: int, config: RiskConfig
+) -> tuple[IntArray, FloatArray, Fitted]:
+    """Fit on accident years <= `cut`, predict years `lo`-`hi` as served (year clamped)."""
+    tr = np.flatnonzero(d.year <= cut)
+    te = np.flatnonzero((d.year >= lo) & (d.year <= hi))
+    f = fit_spec(d, y, tr, spec, config)
+    return te, f.probability(served_x(d, te, float(cut))), f
+
+
+def choose_drift(
+    d: RiskData, y: FloatArray, groups: Sequence[str], c: float, config: RiskConfig
+) -> tuple[str, dict[str, dict[str, float]]]:
+    """The drift treatment with the smallest weighted log loss on the inner temporal split."""
+    out = {}
+    for name, _, _ in DRIFT_VARIANTS:
+        spec = Spec(tuple(_groups_for(groups, name)), c, name)
+        te, p, _ = temporal_probability(
+            d, y, spec, config.inner_cut, config.inner_cut + 1, config.temporal_cut, config
+        )
+        w = d.w[te]
+        out[name] = {
+            "weighted_log_loss": log_loss(y[te], p, w),
+            "weighted_p_over_o": float((w * p).sum() / (w * y[te]).sum()),
+        }
+    best = min(out, key=lambda n: out[n]["weighted_log_loss"])
+    return best, out
+
+
+# ------------------------------------------------------------------ vehicles
+
+
+def noisy_or_logit(p: FloatArray, vehicle: IntArray) -> tuple[FloatArray, IntArray]:
+    """``logit(1 - prod(1 - p))`` per vehicle, and the vehicle ids in that order."""
+    ids, inv = np.unique(vehicle, return_inverse=True)
+    log_none = np.zeros(ids.size)
+    np.add.at(log_none, inv, np.log1p(-np.clip(p, 0.0, 1.0 - 1e-12)))
+    p_any = -np.expm1(log_none)
+    return logit(p_any), ids
+
+
+def vehicle_table(d: RiskData, y: FloatArray) -> tuple[IntArray, FloatArray, FloatArray, IntArray]:
+    """Vehicle ids, P(anyone) outcome, weight and crash per vehicle (the rows' order of ids)."""
+    ids, inv = np.unique(d.vehicle, return_inverse=True)
+    anyone = np.zeros(ids.size)
+    np.maximum.at(anyone, inv, y)
+    w = np.zeros(ids.size)
+    n = np.zeros(ids.size)
+    np.add.at(w, inv, d.w)
+    np.add.at(n, inv, 1.0)
+    crash = np.zeros(ids.size, dtype=np.int64)
+    crash[inv] = d.crash
+    return ids, anyone, w / n, crash
+
+
+def vehicle_recalibration(z: FloatArray, y: FloatArray, w: FloatArray) -> tuple[float, float]:
+    """``(a, b)`` of ``logit P(anyone) = a + b logit(noisy-OR)``, weighted."""
+    from models.offline.field.risk_core import weighted_recalibration
+
+    return weighted_recalibration(z, y, w)
+
+
+def expit_affine(a: float, b: float, z: FloatArray) -> FloatArray:
+    """``expit(a + b z)``."""
+    return expit(a + b * z)

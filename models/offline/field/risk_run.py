@@ -1,0 +1,480 @@
+"""The whole field risk fit (:func:`fit_risk`): stages, figures and the artifact document.
+
+See :mod:`.risk_fit` for the method. Each stage is cached under ``--cache``
+(keyed by the settings), so a fit interrupted at any stage resumes there.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any, Final
+
+import numpy as np
+from sklearn.ensemble import HistGradientBoostingClassifier
+from tqdm import tqdm
+
+from models.arrays import FloatArray, IntArray
+from models.field.features import FieldInputs, FieldMode
+from models.field.model import FieldModel, artifact_for_version
+from models.field.risk_features import ALL_COLUMNS, FEATURE_GROUPS
+from models.field.risk_model import (
+    ARTIFACT_SCHEMA,
+    OUTCOME,
+    canonical_content_sha256,
+    feature_code_sha256,
+)
+from models.offline.field.metrics import threshold_for_sensitivity
+from models.offline.field.occupants import OCCUPANTS_CSV, POPULATION_RULES
+from models.offline.field.published import NHTSA_ALL
+from models.offline.field.risk_core import crash_folds, expit, fit_model
+from models.offline.field.risk_data import Outcome
+from models.offline.field.risk_fit import (
+    RiskConfig,
+    RiskData,
+    Spec,
+    _Cache,
+    choose_drift,
+    fit_spec,
+    load_risk_data,
+    noisy_or_logit,
+    oof_probability,
+    select_spec,
+    temporal_probability,
+    vehicle_recalibration,
+    vehicle_table,
+)
+from models.offline.field.risk_metrics import crash_resamples, score, triage_figures
+from models.units import kmh_to_mph
+
+__all__ = ["MODEL_NAME", "MODEL_VERSION", "RiskFit", "fit_risk"]
+
+MODEL_NAME: Final[str] = "field_iss15"
+#: 3.0.0 (2026-12-06): ISS 15+ fitted on NASS-CDS 1997-2014 (issue 38); the
+#: MAIS 3+ model 2.0.0 stays loadable for recalls.
+MODEL_VERSION: Final[str] = "3.0.0"
+
+#: Groups of the plain regression: linear main effects of every notification
+#: field, unpenalised, no splines or interactions (the reference to match).
+PLAIN_COLUMNS: Final[tuple[str, ...]] = tuple(
+    (
+        "intercept delta_v_kmh near_side far_side rear belted airbag_deployed "
+        "airbag_not_deployed driver front_middle row2 row3 age_years female stature_cm "
+        "mass_kg rollover multiple_impacts model_year"
+    ).split()
+)
+
+
+@dataclass
+class RiskFit:
+    """What a fit produced: the artifact document, its figures and held-out predictions."""
+
+    artifact: dict[str, Any]
+    figures: dict[str, Any]
+    oof: dict[str, FloatArray]
+    data: RiskData
+
+
+def _cols(names: Sequence[str]) -> list[int]:
+    return [ALL_COLUMNS.index(n) for n in names]
+
+
+def _fixed_oof(
+    d: RiskData,
+    y: FloatArray,
+    cols: Sequence[int],
+    folds: Sequence[tuple[IntArray, IntArray]],
+    c: float | None,
+) -> FloatArray:
+    p = np.empty(y.size)
+    for tr, te in folds:
+        p[te] = fit_model(d.x[tr], y[tr], d.w[tr], cols, c).probability(d.x[te])
+    return p
+
+
+def _hgb_oof(
+    d: RiskData, y: FloatArray, folds: Sequence[tuple[IntArray, IntArray]], seed: int
+) -> FloatArray:
+    """Out-of-fold probability of a boosted model (HistGradientBoosting) on every column."""
+    p = np.empty(y.size)
+    for tr, te in tqdm(folds, desc="boosted comparison", leave=False):
+        m = HistGradientBoostingClassifier(
+            max_iter=300, learning_rate=0.05, max_leaf_nodes=15, random_state=seed
+        )
+        m.fit(d.x[tr], y[tr])
+        p[te] = m.predict_proba(d.x[te])[:, 1]
+    return p
+
+
+def _legacy_probability(d: RiskData) -> FloatArray:
+    """P(MAIS 3+) of field model 2.0.0 for every row (its own inputs)."""
+    model = FieldModel.from_artifact(artifact_for_version("2.0.0"))
+    col = {n: d.x[:, i] for i, n in enumerate(ALL_COLUMNS)}
+    rows = d.rows
+    out = np.empty(len(rows))
+    for i in range(len(rows)):
+        inputs = FieldInputs(
+            delta_v_kmh=float(rows["delta_v_kmh"].iat[i]),
+            mode=FieldMode(str(d.mode[i])),
+            belted=bool(col["belted"][i]),
+            multiple_impacts=bool(col["multiple_impacts"][i]),
+            age_years=float(rows["age_years"].iat[i]),
+            sex=None,
+            stature_cm=None if np.isnan(rows["stature_cm"].iat[i]) else rows["stature_cm"].iat[i],
+            mass_kg=None if np.isnan(rows["mass_kg"].iat[i]) else rows["mass_kg"].iat[i],
+        )
+        out[i] = model.predict(inputs).probability
+    return out
+
+
+def target_with_margin(requirement: float, positives: float) -> float:
+    """Sensitivity a threshold is set for: the requirement plus one binomial standard error.
+
+    [R] The requirement (e.g. >= 0.85) must hold on held-out occupants; a
+    threshold set exactly at it on one sample misses it on another half of the
+    time. One standard error of a sensitivity over `positives` occupants (those
+    of one held-out fold) is the margin.
+    """
+    return requirement + math.sqrt(requirement * (1.0 - requirement) / positives)
+
+
+def _inner_threshold(
+    d: RiskData, y: FloatArray, spec: Spec, rows: IntArray, target: float, config: RiskConfig
+) -> float:
+    """Threshold reaching `target` on out-of-fold predictions inside `rows` (folds by crash)."""
+    inner = crash_folds(d.crash[rows], config.n_splits, config.seed + 11)
+    p = np.empty(rows.size)
+    for tr, te in inner:
+        f = fit_spec(d, y, rows[tr], spec, config)
+        p[te] = f.probability(d.x[rows[te]])
+    return threshold_for_sensitivity(y[rows], p, target)
+
+
+def _heldout_operating_point(
+    d: RiskData,
+    y: FloatArray,
+    spec: Spec,
+    folds: Sequence[tuple[IntArray, IntArray]],
+    target: float,
+    config: RiskConfig,
+) -> np.ndarray:
+    """Flags with the threshold chosen inside each training part (its own held-out
+    predictions, as the served threshold is chosen on the fit's), shape (n,)."""
+    flags = np.zeros(y.size, dtype=bool)
+    for tr, te in tqdm(folds, desc="operating point held out", leave=False):
+        t = _inner_threshold(d, y, spec, tr, target, config)
+        flags[te] = fit_spec(d, y, tr, spec, config).probability(d.x[te]) >= t
+    return flags
+
+
+def _vehicle_heldout(
+    d: RiskData, y: FloatArray, p: FloatArray, folds: Sequence[tuple[IntArray, IntArray]]
+) -> tuple[FloatArray, FloatArray, FloatArray, IntArray, FloatArray]:
+    """Held-out P(anyone ISS 15+) per vehicle from held-out occupant probabilities."""
+    ids, anyone, w, crash = vehicle_table(d, y)
+    z, zid = noisy_or_logit(p, d.vehicle)
+    assert np.array_equal(ids, zid)
+    fold_of_crash = np.empty(d.crash.max() + 1, dtype=np.int64)
+    for k, (_, te) in enumerate(folds):
+        fold_of_crash[d.crash[te]] = k
+    vf = fold_of_crash[crash]
+    pv = np.empty(ids.size)
+    for k in range(len(folds)):
+        tr, te = vf != k, vf == k
+        a, b = vehicle_recalibration(z[tr], anyone[tr], w[tr])
+        pv[te] = expit(a + b * z[te])
+    return pv, anyone, w, crash, z
+
+
+def _subgroups(d: RiskData) -> dict[str, np.ndarray]:
+    col = {n: d.x[:, i] for i, n in enumerate(ALL_COLUMNS)}
+    out = {
+        f"mode={m}": d.mode == m for m in ("frontal", "near_side", "far_side", "rear", "rollover")
+    }
+    out["seat=front outboard"] = (col["row2"] + col["row3"] + col["front_middle"]) == 0
+    out["seat=front middle"] = col["front_middle"] > 0
+    out["seat=second row"] = col["row2"] > 0
+    out["seat=third row"] = col["row3"] > 0
+    out["airbag=deployed"] = col["airbag_deployed"] > 0
+    out["airbag=not deployed"] = col["airbag_not_deployed"] > 0
+    out["airbag=none"] = (col["airbag_deployed"] + col["airbag_not_deployed"]) == 0
+    return out
+
+
+def _outcome_stage(
+    d: RiskData,
+    o: Any,
+    drift: str,
+    folds: Sequence[tuple[IntArray, IntArray]],
+    resamples: Sequence[IntArray],
+    config: RiskConfig,
+) -> dict[str, Any]:
+    """Selection, held-out figures (the model, the plain regression, delta-V alone), temporal."""
+    bar = tqdm(total=len(config.c_grid) + len(FEATURE_GROUPS), desc=f"select {o.name}", leave=False)
+    spec, selection = select_spec(d, o.y, folds, config, drift, bar)
+    bar.close()
+    p, _ = oof_probability(d, o.y, spec, folds, config)
+    plain = _fixed_oof(d, o.y, _cols(PLAIN_COLUMNS), folds, None)
+    dv = _fixed_oof(d, o.y, _cols(["intercept", "delta_v_kmh"]), folds, None)
+    te, pt, _ = temporal_probability(
+        d, o.y, spec, config.temporal_cut, config.temporal_cut + 1, int(d.year.max()), config
+    )
+    return {
+        "spec": spec,
+        "selection": selection,
+        "oof": p,
+        "heldout": score(o.y, p, d.w, resamples),
+        "plain": score(o.y, plain, d.w, None),
+        "plain_oof": plain,
+        "delta_v_alone": score(o.y, dv, d.w, None),
+        "auc_minus_plain_ci95": _diff_ci(o.y, p, plain, resamples),
+        "temporal": score(o.y[te], pt, d.w[te], None),
+        "temporal_rows": te,
+        "temporal_p": pt,
+    }
+
+
+def _diff_ci(
+    y: FloatArray, p: FloatArray, q: FloatArray, resamples: Sequence[IntArray]
+) -> list[float]:
+    from sklearn.metrics import roc_auc_score
+
+    diffs = [roc_auc_score(y[ix], p[ix]) - roc_auc_score(y[ix], q[ix]) for ix in resamples]
+    lo, hi = np.percentile(diffs, [2.5, 97.5])
+    return [float(lo), float(hi)]
+
+
+def _bootstrap_refits(
+    d: RiskData, specs: dict[str, Spec], config: RiskConfig
+) -> dict[str, tuple[FloatArray, FloatArray]]:
+    """Per outcome, ``(B, k)`` coefficients and ``(B, 2)`` calibrations of refits by crash."""
+    resamples = crash_resamples(d.crash, config.n_bootstrap, config.seed + 7)
+    ys = {o.name: o.y for o in d.outcomes}
+    out: dict[str, tuple[list[FloatArray], list[FloatArray]]] = {n: ([], []) for n in specs}
+    for ix in tqdm(resamples, desc="bootstrap refits by crash"):
+        for name, spec in specs.items():
+            f = fit_spec(d, ys[name], ix.astype(np.int64), spec, config)
+            out[name][0].append(f.beta)
+            out[name][1].append(np.array(f.calibration))
+    return {n: (np.array(b), np.array(c)) for n, (b, c) in out.items()}
+
+
+def _file_sha256(path: Path) -> str:
+    return hashlib.sha256(path.read_bytes()).hexdigest()
+
+
+def _round(x: Any) -> Any:
+    """Figures rounded for the document (floats to 6 significant digits)."""
+    if isinstance(x, float | np.floating):
+        return float(f"{float(x):.6g}") if np.isfinite(x) else None
+    if isinstance(x, dict):
+        return {str(k): _round(v) for k, v in x.items()}
+    if isinstance(x, list | tuple):
+        return [_round(v) for v in x]
+    if isinstance(x, np.integer):
+        return int(x)
+    return x
+
+
+def fit_risk(config: RiskConfig | None = None, cache_dir: Path | None = None) -> RiskFit:
+    """Fit, measure and document the field risk models (module docstring of :mod:`.risk_fit`)."""
+    cfg = config or RiskConfig()
+    d = load_risk_data(cfg.subsample, cfg.seed)
+    cache = _Cache(cache_dir, cfg.key())
+    folds = crash_folds_cached(d, cfg)
+    resamples = crash_resamples(d.crash, cfg.n_metric_bootstrap, cfg.seed + 1)
+    iss = d.outcomes[0]
+    drift, drift_table = cache.get(
+        "drift", lambda: choose_drift(d, iss.y, tuple(FEATURE_GROUPS), 1.0, cfg)
+    )
+    stages: dict[str, dict[str, Any]] = {}
+    for o in tqdm(d.outcomes, desc="outcomes"):
+
+        def stage(o: Outcome = o) -> dict[str, Any]:
+            return _outcome_stage(d, o, drift, folds, resamples, cfg)
+
+        stages[o.name] = cache.get(f"outcome_{o.name}", stage)
+    figures = cache.get(
+        "iss_extras", lambda: _iss_extras(d, stages["iss15"], folds, resamples, cfg)
+    )
+    for o in d.outcomes:
+        st = stages[o.name]
+
+        def temporal(o: Outcome = o, te: IntArray = st["temporal_rows"]) -> dict[str, Any]:
+            pt = stages[o.name]["temporal_p"]
+            res = crash_resamples(d.crash[te], cfg.n_metric_bootstrap, 4)
+            return score(o.y[te], pt, d.w[te], res)
+
+        st["temporal"] = cache.get(f"temporal_ci_{o.name}", temporal)
+    specs = {n: s["spec"] for n, s in stages.items()}
+    boot = cache.get("bootstrap", lambda: _bootstrap_refits(d, specs, cfg))
+    doc = _document(d, cfg, drift, drift_table, stages, figures, boot)
+    oof = {n: s["oof"] for n, s in stages.items()}
+    return RiskFit(artifact=doc, figures=figures, oof=oof, data=d)
+
+
+def crash_folds_cached(d: RiskData, cfg: RiskConfig) -> list[tuple[IntArray, IntArray]]:
+    """The folds by crash of the fit."""
+    return crash_folds(d.crash, cfg.n_splits, cfg.seed)
+
+
+def _iss_extras(
+    d: RiskData,
+    stage: dict[str, Any],
+    folds: Sequence[tuple[IntArray, IntArray]],
+    resamples: Sequence[IntArray],
+    cfg: RiskConfig,
+) -> dict[str, Any]:
+    """ISS 15+ only: subgroups, comparisons, operating points, the vehicle answer."""
+    y, w, p, spec = d.outcomes[0].y, d.w, stage["oof"], stage["spec"]
+    out: dict[str, Any] = {}
+    out["subgroups"] = {
+        name: {
+            "model": score(y, p, w, resamples, mask),
+            "plain": score(y, stage["plain_oof"], w, None, mask),
+        }
+        for name, mask in tqdm(_subgroups(d).items(), desc="subgroups", leave=False)
+        if mask.any()
+    }
+    hgb = _hgb_oof(d, y, folds, cfg.seed)
+    out["boosted"] = score(y, hgb, w, None, calibration=False)
+    out["boosted"]["auc_minus_model_ci95"] = _diff_ci(y, hgb, p, resamples)
+    legacy = _legacy_probability(d)
+    out["legacy_2_0_0"] = score(y, legacy, w, resamples)
+    nhtsa = expit(NHTSA_ALL.intercept + NHTSA_ALL.slope_per_mph * kmh_to_mph_array(d))
+    out["nhtsa_mais3_curve"] = score(y, nhtsa, w, None)
+    recent = d.year >= 2010
+    mais3 = (d.rows["mais"] >= 3).to_numpy(dtype=np.float64)
+    out["nhtsa_mais3_curve_on_mais3_2010_2014"] = score(mais3, nhtsa, w, None, recent)
+    # operating points: thresholds on all held-out predictions (served), and held out
+    points = {}
+    fold_positives = float(y.sum()) / cfg.n_splits
+    for name, req in (("sens85", cfg.sensitivity), ("acs_cot", cfg.acs_cot_sensitivity)):
+        target = target_with_margin(req, fold_positives)
+        t = threshold_for_sensitivity(y, p, target)
+        flags = _heldout_operating_point(d, y, spec, folds, target, cfg)
+        te, pt = stage["temporal_rows"], stage["temporal_p"]
+        tr = np.flatnonzero(d.year <= cfg.temporal_cut)
+        t_tr = _inner_threshold(d, y, spec, tr, target, cfg)
+        points[name] = {
+            "required_sensitivity": req,
+            "target_sensitivity": target,
+            "threshold": t,
+            "heldout": triage_figures(y, flags, w, resamples),
+            "temporal": triage_figures(
+                y[te], pt >= t_tr, w[te], crash_resamples(d.crash[te], cfg.n_metric_bootstrap, 5)
+            ),
+            "temporal_threshold": t_tr,
+        }
+    out["operating_points"] = points
+    # the vehicle answer
+    pv, anyone, vw, vcrash, z = _vehicle_heldout(d, y, p, folds)
+    vres = crash_resamples(vcrash, cfg.n_metric_bootstrap, cfg.seed + 3)
+    out["vehicle"] = score(anyone, pv, vw, vres)
+    a, b = vehicle_recalibration(z, anyone, vw)
+    boots = []
+    for ix in crash_resamples(vcrash, cfg.n_bootstrap, cfg.seed + 9):
+        boots.append(vehicle_recalibration(z[ix], anyone[ix], vw[ix]))
+    out["vehicle_calibration"] = [a, b]
+    out["vehicle_bootstrap_calibration"] = [list(t) for t in boots]
+    out["vehicle_oof"] = pv
+    return out
+
+
+def kmh_to_mph_array(d: RiskData) -> FloatArray:
+    """Delta-V of every row in mph (explicit conversion)."""
+    kmh = d.rows["delta_v_kmh"].to_numpy(dtype=np.float64)
+    return np.array([kmh_to_mph(v) for v in kmh])
+
+
+def _document(
+    d: RiskData,
+    cfg: RiskConfig,
+    drift: str,
+    drift_table: dict[str, Any],
+    stages: dict[str, dict[str, Any]],
+    extras: dict[str, Any],
+    boot: dict[str, tuple[FloatArray, FloatArray]],
+) -> dict[str, Any]:
+    """The artifact document (figures included), its content checksum last."""
+    outcomes_doc = {}
+    for o in d.outcomes:
+        st = stages[o.name]
+        spec: Spec = st["spec"]
+        f = fit_spec(d, o.y, np.arange(o.y.size), spec, cfg)
+        betas, cals = boot[o.name]
+        outcomes_doc[o.name] = {
+            "label": o.label,
+            "ais_level": o.ais_level,
+            "columns": [ALL_COLUMNS[i] for i in f.columns],
+            "groups": list(spec.groups),
+            "penalty_c": spec.c,
+            "coefficients": f.beta.tolist(),
+            "calibration": list(f.calibration),
+            "bootstrap_coefficients": betas.tolist(),
+            "bootstrap_calibration": cals.tolist(),
+            "selection": _round(st["selection"]),
+            "heldout": _round(st["heldout"]),
+            "plain": _round(st["plain"]),
+            "delta_v_alone": _round(st["delta_v_alone"]),
+            "auc_minus_plain_ci95": _round(st["auc_minus_plain_ci95"]),
+            "temporal": _round(st["temporal"]),
+        }
+    points = {
+        name: {
+            "description": (
+                "flag when P(ISS15+) >= threshold: finds >= "
+                f"{100 * pt['required_sensitivity']:.0f} % of the ISS 15+ occupants held out "
+                f"(threshold set at {pt['target_sensitivity']:.3f} on held-out predictions)"
+                + (" (ACS-COT: under-triage <= 5 %)" if name == "acs_cot" else "")
+            ),
+            "threshold": pt["threshold"],
+            "figures": _round({k: v for k, v in pt.items() if k != "threshold"}),
+        }
+        for name, pt in extras["operating_points"].items()
+    }
+    doc: dict[str, Any] = {
+        "schema": ARTIFACT_SCHEMA,
+        "model": {"name": MODEL_NAME, "version": MODEL_VERSION},
+        "outcome": OUTCOME,
+        "feature_code_sha256": feature_code_sha256(),
+        "candidate_columns": list(ALL_COLUMNS),
+        "imputation": asdict(d.imputation),
+        "data": {
+            "file": OCCUPANTS_CSV.name,
+            "sha256": _file_sha256(OCCUPANTS_CSV),
+            "rows": int(len(d.rows)),
+            "crashes": int(np.unique(d.crash).size),
+            "vehicles": int(np.unique(d.vehicle).size),
+            "years": [int(d.year.min()), int(d.year.max())],
+            "delta_v_max_kmh": float(d.rows["delta_v_kmh"].max()),
+            "population": [
+                {"rule": r, "text": t, "removed": n}
+                for (r, t), (_, n) in zip(POPULATION_RULES, d.removed, strict=True)
+            ],
+        },
+        "config": asdict(cfg),
+        "drift": {"chosen": drift, "inner_temporal": _round(drift_table)},
+        "outcomes": outcomes_doc,
+        "vehicle": {
+            "calibration": list(extras["vehicle_calibration"]),
+            "bootstrap_calibration": extras["vehicle_bootstrap_calibration"],
+            "heldout": _round(extras["vehicle"]),
+        },
+        "operating_points": points,
+        "default_operating_point": "sens85",
+        "comparisons": _round(
+            {k: extras[k] for k in ("boosted", "legacy_2_0_0", "nhtsa_mais3_curve")}
+            | {
+                "nhtsa_mais3_curve_on_mais3_2010_2014": extras[
+                    "nhtsa_mais3_curve_on_mais3_2010_2014"
+                ]
+            }
+        ),
+        "subgroups": _round(extras["subgroups"]),
+    }
+    doc["content_sha256"] = canonical_content_sha256(doc)
+    return doc
