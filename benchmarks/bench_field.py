@@ -1,13 +1,18 @@
-"""Field risk model benchmark: its cost per occupant, and the whole engine beside it.
+"""Field model benchmark: its cost per occupant before and after 3.0.0, and the engine beside it.
 
 Run: ``python benchmarks/bench_field.py [--n N] [--no-write]``. Prints the figures
 and rewrites the "Field risk model" section of ``benchmarks/RESULTS.md``.
 
-Inputs: N calibration rows (seeded draw) as the service builds them. Timed:
-``FieldModel.predict`` alone (design row, 200 bootstrap refits, interval) and
-the decision (``predict`` + the operating point's threshold); and, on the same
-notifications, the whole ``models.triage.triage`` with its ``field_model``
-timing, so that the field model's share of a request is measured in one run.
+Inputs: N calibration rows (seeded draw) as the service builds them. Timed, one
+occupant at a time: ``FieldModel.predict`` of 2.0.0 (MAIS 3+: design row, 200
+bootstrap refits, interval; before) and ``RiskModel.predict`` of 3.0.0 (ISS 15+
+and eight region risks, each with its bootstrap refits and interval; after),
+each with the decision at the default operating point; batch throughput of
+both (occupants per second, all N at once: ``RiskModel.predict_many`` is
+vectorised over occupants); and, on the same notifications, the whole
+``models.triage.triage`` with its ``field_model`` timing (3.0.0 with the
+vehicle answer), so that the field model's share of a request is measured in
+one run.
 """
 
 from __future__ import annotations
@@ -22,9 +27,12 @@ from datetime import UTC, datetime
 import numpy as np
 from results_md import RESULTS, write_section
 
-from models.field.model import load_default
+from models.field.model import FieldModel
+from models.field.risk_model import load_default
+from models.field.versions import artifact_for_version
 from models.offline.field.rows import load_calibration_rows, row_notification
 from models.triage import load_engine_models, notification_field_inputs, triage
+from models.triage.field_evidence import notification_risk_inputs
 
 
 def _stats(samples_ms: list[float]) -> tuple[float, float]:
@@ -38,25 +46,40 @@ def main() -> None:
     parser.add_argument("--no-write", action="store_true", help="print only")
     args = parser.parse_args()
 
-    field = load_default()
+    old = FieldModel.from_artifact(artifact_for_version("2.0.0"))
+    new = load_default()
     models = load_engine_models()
     rows = load_calibration_rows()
     pick = np.random.default_rng(0).choice(len(rows), size=args.n, replace=False)
     notes = [row_notification(rows[i]) for i in pick]
-    inputs = [notification_field_inputs(n)[0] for n in notes]
+    old_inputs = [notification_field_inputs(n)[0] for n in notes]
+    new_inputs = [notification_risk_inputs(n)[0] for n in notes]
 
-    for f in inputs[:20]:
-        field.predict(f)
-    predict_ms = []
-    decide_ms = []
-    for f in inputs:
+    def timed(call: object, items: list[object]) -> list[float]:
+        assert callable(call)
+        for item in items[:20]:
+            call(item)
+        out = []
+        for item in items:
+            t0 = time.perf_counter()
+            call(item)
+            out.append(1000.0 * (time.perf_counter() - t0))
+        return out
+
+    old_ms = timed(
+        lambda f: old.predict(f).probability >= old.threshold(old.predict(f).mode), old_inputs
+    )
+    new_ms = timed(lambda f: new.predict(f).probability >= new.threshold(), new_inputs)
+
+    def batch_rate(call: object, items: list[object]) -> float:
+        assert callable(call)
+        call(items)
         t0 = time.perf_counter()
-        pred = field.predict(f)
-        t1 = time.perf_counter()
-        _ = pred.probability >= field.threshold(pred.mode)
-        t2 = time.perf_counter()
-        predict_ms.append(1000.0 * (t1 - t0))
-        decide_ms.append(1000.0 * (t2 - t0))
+        call(items)
+        return len(items) / (time.perf_counter() - t0)
+
+    old_rate = batch_rate(lambda xs: [old.predict(f) for f in xs], old_inputs)
+    new_rate = batch_rate(new.predict_many, new_inputs)
 
     for n in notes[:10]:
         triage(n, models)
@@ -67,9 +90,15 @@ def main() -> None:
         field_in_engine_ms.append(result.timings_ms["field_model"])
 
     rows_out = [
-        ("`FieldModel.predict` (design row, 200 refits, interval)", *_stats(predict_ms)),
-        ("decision (predict + operating-point threshold)", *_stats(decide_ms)),
-        ("field model inside `triage` (its `timings_ms.field_model`)", *_stats(field_in_engine_ms)),
+        ("before: 2.0.0 `FieldModel.predict` + decision (MAIS 3+)", *_stats(old_ms)),
+        (
+            "after: 3.0.0 `RiskModel.predict` + decision (ISS 15+ and 8 regions)",
+            *_stats(new_ms),
+        ),
+        (
+            "3.0.0 inside `triage` (its `timings_ms.field_model`, with the vehicle answer)",
+            *_stats(field_in_engine_ms),
+        ),
         ("whole engine per one-occupant notification (`engine_total`)", *_stats(engine_ms)),
     ]
     share = statistics.median(field_in_engine_ms) / statistics.median(engine_ms)
@@ -87,6 +116,10 @@ def main() -> None:
         "| step | median (ms) | p99 (ms) |",
         "|---|---:|---:|",
         *(f"| {name} | {med:.3f} | {p99:.3f} |" for name, med, p99 in rows_out),
+        "",
+        f"Batch throughput, {args.n} occupants at once: 2.0.0 {old_rate:,.0f} occupants/s "
+        f"(one `predict` each), 3.0.0 {new_rate:,.0f} occupants/s (`predict_many`, "
+        "vectorised).",
         "",
         f"Target (issue 21): the field model adds under 1 ms per occupant. It is "
         f"{100.0 * share:.1f} % of the engine's median time here; the rest is the occupant "

@@ -28,6 +28,12 @@ class AssumptionCode(StrEnum):
     BMI_IMPUTED = "bmi_imputed"
     DELTA_V_EXTRAPOLATED = "delta_v_extrapolated"
     SECOND_ROW_SEAT = "second_row_seat"
+    SEAT_WITHOUT_OCCUPANT_MODEL = "seat_without_occupant_model"
+    SEX_IMPUTED = "sex_imputed"
+    STATURE_MASS_IMPUTED = "stature_mass_imputed"
+    MODEL_YEAR_IMPUTED = "model_year_imputed"
+    QUARTER_TURNS_IMPUTED = "quarter_turns_imputed"
+    OUTSIDE_FIELD_POPULATION = "outside_field_population"
     OUTSIDE_OCCUPANT_MODEL_COVERAGE = "outside_occupant_model_coverage"
     OCCUPANT_MODEL_FAILED = "occupant_model_failed"
     POSTURE_NOT_SENSED = "posture_not_sensed"
@@ -81,6 +87,28 @@ DESCRIPTIONS: Final[dict[AssumptionCode, str]] = {
     ),
     AssumptionCode.SECOND_ROW_SEAT: (
         "A second-row seat: the field model decides; the occupant models are of the front row."
+    ),
+    AssumptionCode.SEAT_WITHOUT_OCCUPANT_MODEL: (
+        "A seat without occupant models (front middle, second or third row): the field risk "
+        "model decides (its data hold these seats); no occupant-model explanation."
+    ),
+    AssumptionCode.SEX_IMPUTED: (
+        "Sex unknown: the field risk models used the share of women of their data."
+    ),
+    AssumptionCode.STATURE_MASS_IMPUTED: (
+        "Stature or mass unknown: the field risk models used the medians of their data."
+    ),
+    AssumptionCode.MODEL_YEAR_IMPUTED: (
+        "Vehicle model year unknown: the field risk models used the median model year of "
+        "their latest accident year. Send it (VIN 10th character) when known."
+    ),
+    AssumptionCode.QUARTER_TURNS_IMPUTED: (
+        "Rollover reported without its quarter turns: the field risk models used the median "
+        "of rolled vehicles in their data."
+    ),
+    AssumptionCode.OUTSIDE_FIELD_POPULATION: (
+        "An occupant outside the field risk models' data (under 16 years): the probability "
+        "is that of a 16-year-old and is extrapolated."
     ),
     AssumptionCode.OUTSIDE_OCCUPANT_MODEL_COVERAGE: (
         "The PDOF lies between the occupant models' ranges: the field model decides without "

@@ -93,15 +93,15 @@ class ImpactClassification:
 def occupant_side(seat: Seat, drive_side: DriveSide) -> DriveSide | None:
     """Side of the vehicle the occupant sits on (the driver sits on `drive_side`).
 
-    None for the rear middle seat, which is on neither side.
+    None for a middle seat (front, second or third row), on neither side.
     """
     if seat is Seat.DRIVER:
         return drive_side
     if seat is Seat.FRONT_PASSENGER:
         return DriveSide.RIGHT if drive_side is DriveSide.LEFT else DriveSide.LEFT
-    if seat is Seat.REAR_MIDDLE:
+    if seat.middle:
         return None
-    return DriveSide.LEFT if seat is Seat.REAR_LEFT else DriveSide.RIGHT
+    return DriveSide.LEFT if seat in (Seat.REAR_LEFT, Seat.THIRD_ROW_LEFT) else DriveSide.RIGHT
 
 
 def _signed_difference(a_deg: float, b_deg: float) -> float:

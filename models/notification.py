@@ -40,10 +40,12 @@ NEUTRAL_LUMBAR_FLEXION_DEG = 5.8
 
 
 class Seat(StrEnum):
-    """Seat of the occupant (VEDS VehicleSeatLocationCategoryCode 1-5).
+    """Seat of the occupant (VEDS VehicleSeatLocationCategoryCode 1-9).
 
-    The occupant models are of the front row; the engine answers second-row
-    occupants with the statistical baseline (:attr:`front_row`).
+    Codes 1-5: driver, front passenger, second row left, middle, right; 6-8:
+    third row left, middle, right; 9: front row middle. The occupant models are
+    of the driver's and front passenger's seats (:attr:`front_row`); every seat
+    gets the field model's decision.
     """
 
     DRIVER = "driver"
@@ -51,11 +53,29 @@ class Seat(StrEnum):
     REAR_LEFT = "rear_left"
     REAR_MIDDLE = "rear_middle"
     REAR_RIGHT = "rear_right"
+    THIRD_ROW_LEFT = "third_row_left"
+    THIRD_ROW_MIDDLE = "third_row_middle"
+    THIRD_ROW_RIGHT = "third_row_right"
+    FRONT_MIDDLE = "front_middle"
 
     @property
     def front_row(self) -> bool:
-        """The driver's and the front passenger's seats."""
+        """The driver's and the front passenger's seats (the occupant models' seats)."""
         return self in (Seat.DRIVER, Seat.FRONT_PASSENGER)
+
+    @property
+    def row(self) -> int:
+        """Seat row, 1 (front) to 3."""
+        if self in (Seat.DRIVER, Seat.FRONT_PASSENGER, Seat.FRONT_MIDDLE):
+            return 1
+        if self in (Seat.REAR_LEFT, Seat.REAR_MIDDLE, Seat.REAR_RIGHT):
+            return 2
+        return 3
+
+    @property
+    def middle(self) -> bool:
+        """A middle seat (on neither side of the vehicle)."""
+        return self in (Seat.FRONT_MIDDLE, Seat.REAR_MIDDLE, Seat.THIRD_ROW_MIDDLE)
 
 
 class Body(StrEnum):
@@ -275,6 +295,10 @@ class CrashNotification:
     multiple_impacts: bool
     rollover: bool
     occupants: tuple[Occupant, ...]
+    #: Vehicle model year (VIN 10th character or VEDS); None: not sent.
+    model_year: int | None = None
+    #: Rollover quarter turns where the vehicle sends them; None: not sent.
+    rollover_quarter_turns: int | None = None
 
 
 def summary_notification(

@@ -46,10 +46,10 @@ class Settings(BaseSettings):
     )
     operating_point: str | None = Field(
         default=None,
-        description="Named operating point of the field model: `sens80_per_mode` (the "
-        "default: MAIS 3+ sensitivity >= 0.80 within frontal and within near-side crashes), "
-        "`sens80` (>= 0.80 over all modes at the smallest flagged share), `bahouth` (0.10 "
-        "frontal/rear, 0.05 side/rollover). An unknown name leaves the service not ready.",
+        description="Named operating point of the field model: `sens85` (the default: finds "
+        ">= 85 % of ISS 15+ occupants held out), `acs_cot` (under-triage <= 5 %); with field "
+        "model 2.0.0 (recalls): `sens80_per_mode`, `sens80`, `bahouth`. An unknown name leaves "
+        "the service not ready.",
     )
     field_artifact: Path | None = Field(
         default=None,

@@ -1,8 +1,11 @@
-"""The field risk model: P(MAIS 3+) of a real occupant from what a notification carries.
+"""The field risk models: field-calibrated probabilities from what a notification carries.
 
-Fitted offline on real NASS-CDS crashes (:mod:`models.field.fit`, ``aacn-triage
-fit-field``), shipped as a JSON artifact with its checksum and model card
-(``docs/field/MODEL_CARD.md``), served with numpy only
-(:mod:`models.field.model`). Its probability is the one the service decides on;
-the occupant models' answer stays in every response as the physics explanation.
+The decision's model is the ISS 15+ field risk model (:mod:`models.field.risk_model`,
+features :mod:`models.field.risk_features`): P(ISS 15+), P(AIS 3+) per body region and
+P(anyone in the vehicle ISS 15+), fitted offline on NASS-CDS 1997-2014
+(:mod:`models.offline.field.risk_fit`, ``aacn-triage fit-field``), shipped as a JSON
+artifact with its checksums and model card (``docs/field/MODEL_CARD.md``), served with
+numpy only. The MAIS 3+ model it replaced (:mod:`models.field.model`, 2.0.0; 1.0.0
+withdrawn) stays loadable for recall reports (:mod:`models.field.versions`). The
+occupant models' answer stays in every response as the physics explanation.
 """

@@ -12,9 +12,11 @@ region, AIS 2+ where the artifact says so), plus the vehicle answer::
 
     logit P(anyone ISS 15+) = a_v + b_v logit(1 - prod_i (1 - P_i(ISS 15+)))
 
-recalibrated on held-out vehicles. The 95 % intervals are the spread of the
-calibrated logit over bootstrap refits by crash stored in the artifact,
-``expit(eta -/+ z sd)`` around the point estimate.
+recalibrated on held-out vehicles, and never below its riskiest occupant's
+P(ISS 15+) (anyone is at least as likely as any one; the held-out figures of the
+model card are of the recalibrated value before this floor). The 95 % intervals
+are the spread of the calibrated logit over bootstrap refits by crash stored in
+the artifact, ``expit(eta -/+ z sd)`` around the point estimate.
 
 The artifact carries the checksum of its content and of the code that builds
 its features (:mod:`models.field.risk_features`); a tampered or stale artifact
@@ -77,6 +79,17 @@ REGION_NAMES: Final[tuple[str, ...]] = (
     "upper_extremity",
     "lower_extremity",
 )
+
+#: Design columns that carry each input that may be imputed: an imputed input is
+#: named in the answer only when a model uses it.
+_INPUT_COLUMNS: Final[Mapping[str, tuple[str, ...]]] = {
+    "age_years": ("age_years", "age_s1"),
+    "female": ("female",),
+    "stature_cm": ("stature_cm",),
+    "mass_kg": ("mass_kg",),
+    "quarter_turns": ("log1p_quarter_turns",),
+    "model_year": ("model_year",),
+}
 
 _ARTIFACT_FILE: Final[str] = "field_iss15.json"
 _FEATURE_SOURCES: Final[tuple[str, ...]] = ("field/risk_features.py",)
@@ -198,7 +211,7 @@ class RiskPrediction:
     mode : str
         ``frontal``, ``near_side``, ``far_side``, ``rear`` or ``rollover``.
     imputed : tuple of str
-        Inputs that were unknown and imputed.
+        Inputs that were unknown and imputed, where a model uses them.
     extrapolated : bool
         Delta-V above the largest of the data.
     regions : Mapping[str, RegionRisk]
@@ -389,6 +402,12 @@ class RiskModel:
         arrays, imputed = inputs_arrays(inputs, self.imputation)
         return design_columns(arrays), imputed
 
+    @property
+    def used_inputs(self) -> frozenset[str]:
+        """The imputable inputs some outcome model uses (others are not named when unknown)."""
+        cols = {ALL_COLUMNS[i] for m in (self.decision, *self.regions.values()) for i in m.columns}
+        return frozenset(k for k, names in _INPUT_COLUMNS.items() if cols & set(names))
+
     def predict_many(self, inputs: Sequence[RiskInputs]) -> list[RiskPrediction]:
         """Every occupant's answer (vectorised over occupants).
 
@@ -400,6 +419,7 @@ class RiskModel:
         if not inputs:
             return []
         x, imputed = self.design(inputs)
+        used = self.used_inputs
         eta, boot = self.decision.logits(x)
         region_logits = {r: m.logits(x) for r, m in self.regions.items()}
         out = []
@@ -417,7 +437,7 @@ class RiskModel:
                     logit=float(eta[i]),
                     logit_sd=sd,
                     mode=_mode(f),
-                    imputed=imputed[i],
+                    imputed=tuple(k for k in imputed[i] if k in used),
                     extrapolated=f.delta_v_kmh > self.delta_v_max_kmh,
                     regions=regions,
                     bootstrap_probability=_expit(boot[i]),
@@ -453,7 +473,21 @@ class RiskModel:
             self.vehicle_bootstrap_calibration[:, 0] + self.vehicle_bootstrap_calibration[:, 1] * zb
         )
         p, lo, hi, _ = _interval(eta, boot)
+        # never below its riskiest occupant's: anyone is at least as likely as any one
+        floor = max(q.probability for q in predictions)
+        if p < floor:
+            p, lo, hi = floor, min(lo, floor), max(hi, floor)
         return VehicleRisk(p, (lo, hi))
+
+    @property
+    def vehicle_heldout_auc(self) -> float:
+        """AUC of P(anyone ISS 15+) on vehicles held out by crash (the artifact's figure)."""
+        return float(self.document["vehicle"]["heldout"]["auc"])
+
+    @property
+    def operating_points(self) -> Mapping[str, float]:
+        """Operating point name -> threshold (the names the service may configure)."""
+        return self.thresholds
 
     def threshold(self, operating_point: str | None = None) -> float:
         """Decision threshold on P(ISS 15+) (default: the artifact's operating point).

@@ -7,6 +7,7 @@ from collections.abc import Mapping
 
 from models.baseline.logistic import BaselineFeatures
 from models.field.model import FieldModel, FieldPrediction
+from models.field.risk_model import RiskModel, RiskPrediction
 from models.impact_mode import ImpactClassification, ImpactMode
 from models.notification import (
     AirbagState,
@@ -125,6 +126,26 @@ def _field_decision(
         threshold,
         outcome=field_model.outcome,
         model=f"{field_model.name}@{field_model.version}",
+        operating_point=None if models.threshold_override is not None else name,
+    )
+
+
+def _risk_decision(
+    risk_model: RiskModel, models: EngineModels, prediction: RiskPrediction
+) -> TriageDecision:
+    """The decision on P(ISS 15+) of the field risk model at its operating point."""
+    name = models.operating_point or risk_model.default_operating_point
+    threshold = (
+        models.threshold_override
+        if models.threshold_override is not None
+        else risk_model.threshold(name)
+    )
+    return decide(
+        prediction.probability,
+        prediction.ci95,
+        threshold,
+        outcome=risk_model.outcome,
+        model=f"{risk_model.name}@{risk_model.version}",
         operating_point=None if models.threshold_override is not None else name,
     )
 

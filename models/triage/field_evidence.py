@@ -8,10 +8,16 @@ from dataclasses import dataclass
 from models.assumptions import Assumption, AssumptionCode
 from models.field.features import FieldInputs, field_inputs
 from models.field.model import FieldModel, FieldPrediction
-from models.impact_mode import ImpactClassification, classify_impact
+from models.field.risk_features import AirbagCode, RiskInputs, SeatSide
+from models.field.risk_model import RiskModel, RiskPrediction
+from models.impact_mode import ImpactClassification, classify_impact, occupant_side
 from models.notification import (
+    AirbagState,
     CrashNotification,
+    DriveSide,
     Occupant,
+    Seat,
+    Sex,
 )
 from models.pulse import ProcessedPulse, process_pulse
 from models.triage.decision import _baseline_decision
@@ -19,7 +25,13 @@ from models.triage.loading import EngineModels
 from models.triage.occupant_model import _lpm_occupant, _LpmAnswer
 from models.triage.result import TriageDecision, UnknownVehicleModel
 
-__all__ = ["OccupantEvidence", "notification_field_inputs", "occupant_evidence"]
+__all__ = [
+    "OccupantEvidence",
+    "notification_field_inputs",
+    "notification_risk_inputs",
+    "occupant_evidence",
+    "risk_inputs",
+]
 
 
 def _field_assumptions(
@@ -103,7 +115,7 @@ def _occupant_evidence(
     if impact.in_lpm_coverage:
         params = models.parameter_sets[notification.vehicle_model]
         answer = _lpm_occupant(index, occupant, impact, pulse, params, models, assumptions)
-    elif occupant.seat.front_row:
+    elif occupant.seat.front_row:  # other seats: said with the field model's assumptions
         assumptions.append(
             Assumption(
                 AssumptionCode.OUTSIDE_OCCUPANT_MODEL_COVERAGE,
@@ -174,3 +186,120 @@ def occupant_evidence(
         for i, o in enumerate(notification.occupants)
     ]
     return out, assumptions
+
+
+_AIRBAG_CODES = {
+    AirbagState.DEPLOYED: AirbagCode.DEPLOYED,
+    AirbagState.NOT_DEPLOYED: AirbagCode.NOT_DEPLOYED,
+    AirbagState.ABSENT: AirbagCode.NONE,
+}
+
+
+def risk_inputs(
+    occupant: Occupant, notification: CrashNotification, pulse: ProcessedPulse
+) -> RiskInputs:
+    """The field risk models' inputs of one occupant (:mod:`models.field.risk_features`).
+
+    The direction of the delta-V is the processed pulse's PDOF; the seat's side
+    is the vehicle's side it sits on (the driver's is the drive side); a
+    frontal airbag reported absent is the data's "none".
+    """
+    side = occupant_side(occupant.seat, notification.drive_side)
+    return RiskInputs(
+        delta_v_kmh=float(pulse.delta_v_kmh),
+        pdof_deg=float(pulse.pdof_deg),
+        seat_row=occupant.seat.row,
+        seat_side=(
+            SeatSide.MIDDLE
+            if side is None
+            else SeatSide.LEFT
+            if side is DriveSide.LEFT
+            else SeatSide.RIGHT
+        ),
+        driver=occupant.seat is Seat.DRIVER,
+        belted=bool(occupant.belted),
+        frontal_airbag=_AIRBAG_CODES[occupant.frontal_airbag],
+        rollover=bool(notification.rollover),
+        multiple_impacts=bool(notification.multiple_impacts),
+        quarter_turns=notification.rollover_quarter_turns,
+        age_years=occupant.age_years,
+        female=None if occupant.sex is None else occupant.sex is Sex.FEMALE,
+        stature_cm=occupant.stature_cm,
+        mass_kg=occupant.mass_kg,
+        model_year=notification.model_year,
+    )
+
+
+def notification_risk_inputs(notification: CrashNotification) -> list[RiskInputs]:
+    """The field risk models' inputs for every occupant, as :func:`triage` builds them."""
+    pulse = process_pulse(notification.pulse)
+    return [risk_inputs(o, notification, pulse) for o in notification.occupants]
+
+
+def _risk_assumptions(
+    index: int, occupant: Occupant, prediction: RiskPrediction, model: RiskModel
+) -> list[Assumption]:
+    """What the field risk models assumed for one occupant, each named."""
+    imp = model.imputation
+    who = f"occupants[{index}]"
+    texts = {
+        "age_years": (
+            AssumptionCode.AGE_IMPUTED,
+            f"{who}: age unknown: the field risk models use their data's median, "
+            f"{imp.age_years:g} years",
+        ),
+        "female": (
+            AssumptionCode.SEX_IMPUTED,
+            f"{who}: sex unknown: the field risk models use their data's share of women, "
+            f"{imp.female:.2f}",
+        ),
+        "stature_cm": (
+            AssumptionCode.STATURE_MASS_IMPUTED,
+            f"{who}: stature unknown: the field risk models use their data's median, "
+            f"{imp.stature_cm:g} cm",
+        ),
+        "mass_kg": (
+            AssumptionCode.STATURE_MASS_IMPUTED,
+            f"{who}: mass unknown: the field risk models use their data's median, "
+            f"{imp.mass_kg:g} kg",
+        ),
+        "model_year": (
+            AssumptionCode.MODEL_YEAR_IMPUTED,
+            f"{who}: vehicle model year unknown: the field risk models use "
+            f"{imp.model_year:g} (their latest accident year's median)",
+        ),
+        "quarter_turns": (
+            AssumptionCode.QUARTER_TURNS_IMPUTED,
+            f"{who}: rollover without quarter turns: the field risk models use "
+            f"{imp.quarter_turns:g} (the median of rolled vehicles in their data)",
+        ),
+    }
+    out = [Assumption(*texts[name], index) for name in prediction.imputed]
+    if occupant.age_years is not None and occupant.age_years < 16.0:
+        out.append(
+            Assumption(
+                AssumptionCode.OUTSIDE_FIELD_POPULATION,
+                f"{who}: age {occupant.age_years:g}: the field risk models' data are of "
+                "occupants 16 or older; the probability is extrapolated",
+                index,
+            )
+        )
+    if prediction.extrapolated:
+        out.append(
+            Assumption(
+                AssumptionCode.DELTA_V_EXTRAPOLATED,
+                f"{who}: delta-V above the field risk models' data (largest "
+                f"{model.delta_v_max_kmh:.0f} km/h): the probability is extrapolated",
+                index,
+            )
+        )
+    if not occupant.seat.front_row:
+        out.append(
+            Assumption(
+                AssumptionCode.SEAT_WITHOUT_OCCUPANT_MODEL,
+                f"{who}: {occupant.seat.value} seat: the field risk model decides (its data "
+                "hold this seat row and side); no occupant model is of this seat",
+                index,
+            )
+        )
+    return out

@@ -11,8 +11,8 @@ from pathlib import Path
 from models import ENGINE_VERSION
 from models.baseline.logistic import BaselineModel, load_default
 from models.constants import DEFAULT_POSTURE_SD_DEG, DEFAULT_SEAT_TRACK_SD_MM
-from models.field.model import FieldModel
-from models.field.model import load_default as load_field_model
+from models.field.risk_model import load_default as load_field_model
+from models.field.versions import AnyFieldModel, load_field_artifact
 from models.injury.batch_compiled import warm_up as _warm_up_p_iss
 from models.lpm.fingerprint import lpm_code_sha256, sources_sha256
 from models.lpm.params import ParameterSet, available_parameter_sets, load_parameter_set
@@ -87,8 +87,10 @@ class EngineModels:
     surrogates : SurrogateLibrary or None
         PCE surrogates for the confidence intervals; None: the interim interval
         from direct occupant-model runs over the sensor-uncertainty box.
-    field : FieldModel or None
-        The field risk model the decision is made with; None only for offline
+    field : RiskModel or FieldModel or None
+        The field model the decision is made with (the shipped ISS 15+
+        :class:`models.field.risk_model.RiskModel`, or a MAIS 3+
+        :class:`models.field.model.FieldModel` for recalls); None only for offline
         tools that compute the occupant models' answers alone
         (:func:`occupant_model_answers`): :func:`triage` needs it.
     operating_point : str or None
@@ -102,7 +104,7 @@ class EngineModels:
     baseline: BaselineModel
     parameter_sets: Mapping[str, ParameterSet]
     surrogates: SurrogateLibrary | None = None
-    field: FieldModel | None = None
+    field: AnyFieldModel | None = None
     operating_point: str | None = None
     threshold_override: float | None = None
     posture_sd_deg: float = DEFAULT_POSTURE_SD_DEG
@@ -199,12 +201,10 @@ def load_engine_models(
         When an artifact is missing, malformed, altered, or does not match the
         code, or `operating_point` is not one the field model defines.
     """
-    field_model: FieldModel | None = None
+    field_model: AnyFieldModel | None = None
     if use_field:
         field_model = (
-            load_field_model()
-            if field_artifact is None
-            else FieldModel.from_artifact(field_artifact)
+            load_field_model() if field_artifact is None else load_field_artifact(field_artifact)
         )
     if (
         field_model is not None

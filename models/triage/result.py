@@ -8,6 +8,7 @@ from enum import StrEnum
 
 from models.assumptions import Assumption
 from models.field.features import FieldMode
+from models.field.risk_model import RegionRisk
 from models.impact_mode import ImpactClassification
 from models.notification import (
     Body,
@@ -26,6 +27,7 @@ __all__ = [
     "SensorInputs",
     "OccupantTriage",
     "TriageResult",
+    "VehicleRiskAnswer",
 ]
 
 
@@ -83,9 +85,9 @@ class TriageDecision:
         Positive when ``probability >= threshold``.
     recommendation : str
     outcome : str
-        What `probability` is a probability of (``MAIS3+`` for the field model,
-        ``ISS15+`` for the occupant models, the police-reported outcome for the
-        baseline).
+        What `probability` is a probability of (``ISS15+`` for the field risk
+        model 3.0.0 on and the occupant models, ``MAIS3+`` for field model 2.0.0,
+        the police-reported outcome for the baseline).
     model : str
         Name of the model that gave it.
     operating_point : str or None
@@ -161,6 +163,32 @@ class OccupantTriage:
     probability_zero_load: float | None = None
     #: occupant models only: the posture and seat track used, with their SDs
     sensor_inputs: SensorInputs | None = None
+    #: the field risk models' P(AIS 3+ injury) per body region (AIS 2+ where the
+    #: region's `ais_level` says so); None with a MAIS 3+ field model (2.0.0)
+    region_risk: Mapping[str, RegionRisk] | None = None
+
+
+@dataclass(frozen=True)
+class VehicleRiskAnswer:
+    """P(anyone in the vehicle ISS 15+), the case-level answer of the field risk model.
+
+    Attributes
+    ----------
+    probability : float
+    probability_ci95 : (float, float)
+        Bootstrap refits by crash.
+    heldout_auc : float
+        Its AUC on vehicles held out by crash (NASS-CDS 1997-2014, unweighted).
+    model : str
+        ``name@version``.
+    outcome : str
+    """
+
+    probability: float
+    probability_ci95: tuple[float, float]
+    heldout_auc: float
+    model: str
+    outcome: str = "anyone ISS15+"
 
 
 @dataclass(frozen=True)
@@ -175,3 +203,5 @@ class TriageResult:
     engine_version: str
     models: Mapping[str, ModelInfo]
     timings_ms: Mapping[str, float] = field(compare=False)
+    #: P(anyone in the vehicle ISS 15+); None with a MAIS 3+ field model (2.0.0)
+    vehicle: VehicleRiskAnswer | None = None

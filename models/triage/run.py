@@ -8,13 +8,20 @@ import time
 from models import ENGINE_VERSION
 from models.assumptions import Assumption, AssumptionCode
 from models.field.features import FieldMode
+from models.field.risk_model import RiskModel, RiskPrediction
 from models.notification import (
     CrashNotification,
     Occupant,
 )
 from models.pulse import process_pulse
-from models.triage.decision import _field_decision, _worst
-from models.triage.field_evidence import OccupantEvidence, _field_assumptions, _occupant_evidence
+from models.triage.decision import _field_decision, _risk_decision, _worst
+from models.triage.field_evidence import (
+    OccupantEvidence,
+    _field_assumptions,
+    _occupant_evidence,
+    _risk_assumptions,
+    risk_inputs,
+)
 from models.triage.loading import EngineModels
 from models.triage.result import (
     Method,
@@ -23,6 +30,7 @@ from models.triage.result import (
     TriageDecision,
     TriageResult,
     UnknownVehicleModel,
+    VehicleRiskAnswer,
 )
 
 __all__ = ["triage"]
@@ -64,6 +72,16 @@ def _occupant_triage(
         probability_uncorrected=answer.probability_uncorrected,
         probability_zero_load=answer.probability_zero_load,
         sensor_inputs=answer.sensor_inputs,
+    )
+
+
+def _vehicle_answer(model: RiskModel, predictions: list[RiskPrediction]) -> VehicleRiskAnswer:
+    v = model.vehicle(predictions)
+    return VehicleRiskAnswer(
+        probability=v.probability,
+        probability_ci95=v.ci95,
+        heldout_auc=model.vehicle_heldout_auc,
+        model=f"{model.name}@{model.version}",
     )
 
 
@@ -119,15 +137,32 @@ def triage(notification: CrashNotification, models: EngineModels) -> TriageResul
         )
 
     occupants: list[OccupantTriage] = []
+    risk_predictions: list[RiskPrediction] = []
     field_ms = 0.0
     for i, occupant in enumerate(notification.occupants):
         evidence = _occupant_evidence(i, occupant, notification, pulse, models, assumptions)
         tf = time.perf_counter()
-        prediction = field_model.predict(evidence.field_inputs)
-        decision = _field_decision(field_model, models, prediction)
+        if isinstance(field_model, RiskModel):
+            risk = field_model.predict(risk_inputs(occupant, notification, pulse))
+            risk_predictions.append(risk)
+            decision = _risk_decision(field_model, models, risk)
+            answered = dataclasses.replace(
+                _occupant_triage(occupant, evidence, decision, FieldMode(risk.mode)),
+                region_risk=risk.regions,
+            )
+            assumptions.extend(_risk_assumptions(i, occupant, risk, field_model))
+        else:
+            prediction = field_model.predict(evidence.field_inputs)
+            decision = _field_decision(field_model, models, prediction)
+            answered = _occupant_triage(occupant, evidence, decision, prediction.mode)
+            assumptions.extend(_field_assumptions(i, occupant, prediction, field_model))
         field_ms += 1000.0 * (time.perf_counter() - tf)
-        assumptions.extend(_field_assumptions(i, occupant, prediction, field_model))
-        occupants.append(_occupant_triage(occupant, evidence, decision, prediction.mode))
+        occupants.append(answered)
+    vehicle = (
+        _vehicle_answer(field_model, risk_predictions)
+        if isinstance(field_model, RiskModel)
+        else None
+    )
     used_lpm = any(o.method is Method.LPM for o in occupants)
     t2 = time.perf_counter()
 
@@ -145,4 +180,5 @@ def triage(notification: CrashNotification, models: EngineModels) -> TriageResul
             "field_model": field_ms,
             "engine_total": 1000.0 * (t2 - t0),
         },
+        vehicle=vehicle,
     )

@@ -22,14 +22,21 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
     "received_at": "2026-11-23T08:15:31Z",
     "triage": {
         "iss15_plus": True,
-        "probability": 0.1357,
-        "probability_ci95": [0.08086, 0.219],
-        "threshold": 0.03407,
+        "probability": 0.06148,
+        "probability_ci95": [0.05188, 0.07272],
+        "threshold": 0.01498,
         "recommendation": "Transport to a Level I trauma center: vehicle telemetry "
         "consistent with severe injury (ISS 15 or more likely).",
-        "outcome": "MAIS3+",
-        "model": "field_mais3@2.0.0",
-        "operating_point": "sens80_per_mode",
+        "outcome": "ISS15+",
+        "model": "field_iss15@3.0.0",
+        "operating_point": "sens85",
+    },
+    "vehicle": {
+        "probability": 0.06148,
+        "probability_ci95": [0.047, 0.0738],
+        "heldout_auc": 0.8846,
+        "outcome": "anyone ISS15+",
+        "model": "field_iss15@3.0.0",
     },
     "occupants": [
         {
@@ -73,17 +80,59 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
                 "seat_track_mm": 0.0,
                 "seat_track_sd_mm": 25.51,
             },
+            "region_risk": {
+                "head": {
+                    "probability": 0.02,
+                    "probability_ci95": [0.01605, 0.02489],
+                    "ais_level": 3,
+                },
+                "face": {
+                    "probability": 0.01537,
+                    "probability_ci95": [0.01119, 0.02107],
+                    "ais_level": 2,
+                },
+                "neck": {
+                    "probability": 0.0009985,
+                    "probability_ci95": [0.0004876, 0.002044],
+                    "ais_level": 2,
+                },
+                "thorax": {
+                    "probability": 0.06684,
+                    "probability_ci95": [0.0539, 0.08261],
+                    "ais_level": 3,
+                },
+                "abdomen": {
+                    "probability": 0.01273,
+                    "probability_ci95": [0.008687, 0.01862],
+                    "ais_level": 3,
+                },
+                "spine": {
+                    "probability": 0.01213,
+                    "probability_ci95": [0.008556, 0.01717],
+                    "ais_level": 3,
+                },
+                "upper_extremity": {
+                    "probability": 0.01588,
+                    "probability_ci95": [0.01169, 0.02154],
+                    "ais_level": 3,
+                },
+                "lower_extremity": {
+                    "probability": 0.06392,
+                    "probability_ci95": [0.05226, 0.07797],
+                    "ais_level": 3,
+                },
+            },
             "triage": {
                 "iss15_plus": True,
-                "probability": 0.1357,
-                "probability_ci95": [0.08086, 0.219],
-                "threshold": 0.03407,
+                "probability": 0.06148,
+                "probability_ci95": [0.05188, 0.07272],
+                "threshold": 0.01498,
                 "recommendation": "Transport to a Level I trauma center: vehicle "
                 "telemetry consistent with severe injury (ISS 15 "
                 "or more likely).",
-                "outcome": "MAIS3+",
-                "model": "field_mais3@2.0.0",
-                "operating_point": "sens80_per_mode",
+                "outcome": "ISS15+",
+                "model": "field_iss15@3.0.0",
+                "operating_point": "sens85",
             },
             "occupant_model": {
                 "iss15_plus": False,
@@ -122,11 +171,23 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
     },
     "assumptions": [
         {
-            "code": "bmi_imputed",
-            "message": "occupants[0]: stature or mass unknown: the field model uses the "
-            "calibration median body mass index, 25.1 kg/m2",
+            "code": "stature_mass_imputed",
+            "message": "occupants[0]: stature unknown: the field risk models use their "
+            "data's median, 170 cm",
             "occupant": 0,
-        }
+        },
+        {
+            "code": "stature_mass_imputed",
+            "message": "occupants[0]: mass unknown: the field risk models use their "
+            "data's median, 75 kg",
+            "occupant": 0,
+        },
+        {
+            "code": "model_year_imputed",
+            "message": "occupants[0]: vehicle model year unknown: the field risk models "
+            "use 2010 (their latest accident year's median)",
+            "occupant": 0,
+        },
     ],
     "engine_version": "0.2.0",
     "models": {
@@ -135,8 +196,8 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
             "sha256": "b670eb94214f8538cb2bf5a286f617204aec2c091e667622dc418cd6b1ac7710",
         },
         "field_model": {
-            "version": "2.0.0",
-            "sha256": "b353f561ad7481de28385f42f99b6088906c916e56a2e1124dfe4d17ec588c4b",
+            "version": "3.0.0",
+            "sha256": "33d447522b6108e75695294900e6bbca664c5160b15633e661b35c3537b60b7b",
         },
         "lpm_parameters:compact_sedan": {
             "version": "compact_sedan",
@@ -144,11 +205,11 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         },
         "lpm_code": {
             "version": "0.2.0",
-            "sha256": "7669bf9c0b91fc4dd58755fabe0f7de941c9210df770ea62e4dedac5517865fb",
+            "sha256": "d7d2e962acae0af7dc466db6c16982a9ea7ee84649f6c09669637503b15e5921",
         },
         "triage_code": {
             "version": "0.2.0",
-            "sha256": "6afaedfe3519185e0888e9a33d6126411518f5be27546a7235ad4346c3fb2752",
+            "sha256": "c442b9dc6ac377f847ba32de1526ef56489b163a34b8282f05de933505c67b02",
         },
         "risk_calibration": {
             "version": "1",
@@ -160,10 +221,10 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         },
         "surrogate_evaluation": {
             "version": "7",
-            "sha256": "b692f5d46ab9b8ea93674806f953f13f3a4d36228cd2a0e27eedafa4b9b7ceb4",
+            "sha256": "41f3094230e1b62c3af58ff6f138d5bcaace00ec3c3b74b66d8a53bd6e5365cd",
         },
     },
-    "timings_ms": {"pulse": 0.08, "occupants": 11.35, "field_model": 0.09, "engine_total": 11.42},
+    "timings_ms": {"pulse": 0.13, "occupants": 91.02, "field_model": 1.317, "engine_total": 91.15},
     "stored": True,
     "spooled": False,
 }

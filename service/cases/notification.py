@@ -11,7 +11,7 @@ import math
 import re
 from dataclasses import dataclass
 from datetime import UTC, datetime, timedelta
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any, Final, Literal
 
 from pydantic import (
     AfterValidator,
@@ -264,6 +264,24 @@ PulseIn = Annotated[
 # ------------------------------------------------------------------- notification
 
 
+#: VIN 10th character -> model year in the 1980-2009 cycle (49 CFR 565.15; I, O, Q,
+#: U, Z and 0 are not used); the 2010-2039 cycle adds 30 years.
+_VIN_YEAR_CODES: Final[str] = "ABCDEFGHJKLMNPRSTVWXY123456789"
+
+
+def vin_model_year(vin: str) -> int | None:
+    """Model year of a 17-character VIN (49 CFR 565.15), None when its code is not a year.
+
+    The 10th character cycles every 30 years; the 7th tells the cycles apart for
+    passenger cars, multipurpose vehicles and light trucks: a letter there means
+    model year 2010 or later, a digit 1980-2009.
+    """
+    k = _VIN_YEAR_CODES.find(vin[9])
+    if k < 0:
+        return None
+    return 1980 + k + (30 if vin[6].isalpha() else 0)
+
+
 class VehicleIn(WireModel):
     """The vehicle that crashed."""
 
@@ -281,6 +299,21 @@ class VehicleIn(WireModel):
         default=engine.DriveSide.LEFT,
         description="Side the driver sits on: `left` for left-hand-drive vehicles.",
     )
+    model_year: int | None = Field(
+        default=None,
+        ge=1950,
+        le=2100,
+        description="Vehicle model year (the field risk models use it: newer vehicles protect "
+        "better). Omitted: read from the VIN's 10th character where a VIN is sent, else the "
+        "field risk models' median (reported as an assumption).",
+        examples=[2019],
+    )
+
+    def engine_model_year(self) -> int | None:
+        """`model_year`, else the VIN's (None without either)."""
+        if self.model_year is not None:
+            return self.model_year
+        return None if self.vin is None else vin_model_year(self.vin)
 
 
 class CrashIn(WireModel):
@@ -289,6 +322,14 @@ class CrashIn(WireModel):
     pulse: PulseIn
     multiple_impacts: bool = Field(default=False, description="More than one impact event.")
     rollover: bool = Field(default=False, description="The vehicle rolled over.")
+    rollover_quarter_turns: int | None = Field(
+        default=None,
+        ge=0,
+        le=40,
+        description="Quarter turns of the rollover where the vehicle senses them (used by the "
+        "field risk models). Omitted with `rollover`: their median (reported).",
+        examples=[2],
+    )
 
 
 class OccupantIn(WireModel):
@@ -486,6 +527,8 @@ class CrashNotificationIn(WireModel):
                 multiple_impacts=self.crash.multiple_impacts,
                 rollover=self.crash.rollover,
                 occupants=tuple(occupants),
+                model_year=self.vehicle.engine_model_year(),
+                rollover_quarter_turns=self.crash.rollover_quarter_turns,
             ),
             notes,
         )

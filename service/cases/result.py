@@ -29,6 +29,8 @@ __all__ = [
     "PulseOut",
     "SensorInputsOut",
     "OccupantOut",
+    "RegionRiskOut",
+    "VehicleRiskOut",
     "AssumptionOut",
     "ModelVersionOut",
     "CaseResult",
@@ -56,10 +58,11 @@ class TriageOut(OutModel):
         ge=0,
         le=1,
         description="Probability of `outcome`. The decision (`triage` of a case or occupant) is "
-        "the field risk model's P(MAIS 3+), calibrated on real NASS-CDS crashes; MAIS 3+ is the "
-        "stand-in for ISS 15+ (broader: one AIS 3 injury alone is ISS 9). Second opinions: the "
-        "occupant models' P(ISS >= 15) attributable to the crash loads (`occupant_model`), and "
-        "the statistical baseline's police-reported A+K risk (`baseline`).",
+        "the field risk model's P(ISS 15+) of such occupants in US towaway crashes, fitted on "
+        "NASS-CDS 1997-2014 and calibrated with its national weights (field model 2.0.0, kept "
+        "for recalls, gave P(MAIS 3+), a broader stand-in). Second opinions: the occupant "
+        "models' P(ISS >= 15) attributable to the crash loads (`occupant_model`), and the "
+        "statistical baseline's police-reported A+K risk (`baseline`).",
     )
     probability_ci95: tuple[float, float] = Field(
         description="95% interval of `probability` [low, high]; it holds `probability`."
@@ -67,18 +70,18 @@ class TriageOut(OutModel):
     threshold: float = Field(description="Decision threshold on `probability`.")
     recommendation: str = Field(description="What to do with the patient, in words.")
     outcome: str = Field(
-        description="What `probability` is a probability of: `MAIS3+` (field model), "
-        "`ISS15+` (occupant models), `police_A+K` (statistical baseline).",
-        examples=["MAIS3+"],
+        description="What `probability` is a probability of: `ISS15+` (field risk model "
+        "3.0.0 on, and occupant models), `MAIS3+` (field model 2.0.0, recalls), `police_A+K` "
+        "(statistical baseline).",
+        examples=["ISS15+"],
     )
-    model: str = Field(description="The model that gave it.", examples=["field_mais3@2.0.0"])
+    model: str = Field(description="The model that gave it.", examples=["field_iss15@3.0.0"])
     operating_point: str | None = Field(
         default=None,
         description="Named operating point of the field model whose threshold decided "
-        "(`sens80_per_mode`, the default: MAIS 3+ sensitivity >= 0.80 within frontal and "
-        "within near-side crashes; `sens80`: >= 0.80 over all modes at the smallest flagged "
-        "share; `bahouth`: 0.10 frontal/rear, 0.05 side/rollover); null when "
-        "`AACN_TRIAGE_THRESHOLD` overrides it or for second opinions.",
+        "(`sens85`, the default: finds >= 85 % of ISS 15+ occupants held out; `acs_cot`: "
+        "under-triage <= 5 %; field model 2.0.0: `sens80_per_mode`, `sens80`, `bahouth`); "
+        "null when `AACN_TRIAGE_THRESHOLD` overrides it or for second opinions.",
     )
 
 
@@ -123,6 +126,51 @@ class SensorInputsOut(OutModel):
         description="Seat track of the direct run, mm forward of mid track (resolved, clamped)."
     )
     seat_track_sd_mm: float = Field(description="Seat track SD propagated into the intervals, mm.")
+
+
+class RegionRiskOut(OutModel):
+    """P(injury of AIS `ais_level` or more) in one body region of one occupant."""
+
+    probability: float = Field(
+        ge=0,
+        le=1,
+        description="Field-calibrated probability of an AIS `ais_level`+ injury in the region, "
+        "of such occupants in US towaway crashes (NASS-CDS 1997-2014, national weights).",
+        examples=[0.031],
+    )
+    probability_ci95: tuple[float, float] = Field(
+        description="95% interval [low, high] (bootstrap refits by crash); it holds `probability`.",
+        examples=[[0.024, 0.040]],
+    )
+    ais_level: int = Field(
+        ge=2,
+        le=3,
+        description="The AIS level of the outcome: 3 (serious), or 2 where AIS 3+ is too rare in "
+        "the region to fit (face, neck; model card).",
+        examples=[3],
+    )
+
+
+class VehicleRiskOut(OutModel):
+    """P(anyone in the vehicle ISS 15+): the case-level answer of the field risk model."""
+
+    probability: float = Field(
+        ge=0,
+        le=1,
+        description="Probability that at least one occupant of the vehicle is ISS 15+ (the unit "
+        "of OnStar's published injury severity prediction).",
+        examples=[0.012],
+    )
+    probability_ci95: tuple[float, float] = Field(
+        description="95% interval [low, high] (bootstrap refits by crash).",
+        examples=[[0.009, 0.016]],
+    )
+    heldout_auc: float = Field(
+        description="Its AUC on NASS-CDS vehicles held out by crash (model card).",
+        examples=[0.88],
+    )
+    outcome: str = Field(description="`anyone ISS15+`.", examples=["anyone ISS15+"])
+    model: str = Field(description="The model that gave it.", examples=["field_iss15@3.0.0"])
 
 
 class OccupantOut(OutModel):
@@ -195,8 +243,21 @@ class OccupantOut(OutModel):
         "at, with the SDs its intervals propagate (a reading and its sensor SD, or the range "
         "the evidence allows; see `assumptions`).",
     )
+    region_risk: dict[str, RegionRiskOut] | None = Field(
+        default=None,
+        description="Field-calibrated risk of a serious injury in each body region (`head`, "
+        "`face`, `neck`, `thorax`, `abdomen`, `spine`, `upper_extremity`, `lower_extremity`), "
+        "fitted on real injuries (NASS-CDS 1997-2014); `ais_level` says AIS 3+ or 2+. Null "
+        "with field model 2.0.0 (recalls).",
+        examples=[
+            {
+                "head": {"probability": 0.031, "probability_ci95": [0.024, 0.040], "ais_level": 3},
+                "neck": {"probability": 0.002, "probability_ci95": [0.001, 0.004], "ais_level": 2},
+            }
+        ],
+    )
     triage: TriageOut = Field(
-        description="The decision: the field model's P(MAIS 3+) at its operating point."
+        description="The decision: the field risk model's P(ISS 15+) at its operating point."
     )
     occupant_model: TriageOut | None = Field(
         default=None,
@@ -240,6 +301,11 @@ class CaseResult(OutModel):
     event_id: str = Field(description="The sender's event id.")
     received_at: datetime = Field(description="When the service received the notification.")
     triage: TriageOut = Field(description="The case-level decision: the worst occupant's.")
+    vehicle: VehicleRiskOut | None = Field(
+        default=None,
+        description="P(anyone in the vehicle ISS 15+) with its held-out AUC; null with field "
+        "model 2.0.0 (recalls).",
+    )
     occupants: list[OccupantOut] = Field(description="One result per occupant, in input order.")
     pulse: PulseOut
     assumptions: list[AssumptionOut] = Field(
@@ -350,6 +416,16 @@ def _occupant_out(o: OccupantTriage) -> OccupantOut:
             if o.sensor_inputs is not None
             else None
         ),
+        region_risk=(
+            {
+                name: RegionRiskOut(
+                    probability=r.probability, probability_ci95=r.ci95, ais_level=r.ais_level
+                )
+                for name, r in o.region_risk.items()
+            }
+            if o.region_risk is not None
+            else None
+        ),
         triage=_triage_out(o.triage),
         occupant_model=_triage_out(o.occupant_model) if o.occupant_model is not None else None,
         baseline=_triage_out(o.baseline),
@@ -370,6 +446,17 @@ def to_case_result(
         event_id=result.event_id,
         received_at=received_at,
         triage=_triage_out(result.triage),
+        vehicle=(
+            VehicleRiskOut(
+                probability=result.vehicle.probability,
+                probability_ci95=result.vehicle.probability_ci95,
+                heldout_auc=result.vehicle.heldout_auc,
+                outcome=result.vehicle.outcome,
+                model=result.vehicle.model,
+            )
+            if result.vehicle is not None
+            else None
+        ),
         occupants=[_occupant_out(o) for o in result.occupants],
         pulse=PulseOut(
             delta_v_kmh=p.delta_v_kmh,

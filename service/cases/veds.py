@@ -24,15 +24,16 @@ What is mapped (``docs/api.md`` has the table):
   rollover quarter turns. The pulse with the largest delta-V becomes the summary
   pulse; several pulses are multiple impacts.
 - ``veds:VehicleSeat``: location code (1 driver, 2 front passenger, 3-5 second row
-  left, middle, right), occupied, belt fastened (and monitored).
+  left, middle, right, 6-8 third row left, middle, right, 9 front middle), occupied,
+  belt fastened (and monitored).
 - ``veds:Airbag``: category (FRONT; SIDE and CURTAIN) and deployed, given to the
   seats they can protect (VEDS airbags name no seat).
 - ``veds:VehicleRolloverIndicator``, ``veds:MultipleImpactsIndicator``, the incident
-  id (``event_id``) and time (``occurred_at``); make, model and year are recorded.
+  id (``event_id``) and time (``occurred_at``); the model year (``nc:ItemModelYearDate``)
+  becomes ``vehicle.model_year``; make and model are recorded.
 
-An unknown unit, a missing delta-V, a seat code that does not exist (or an
-occupied seat the service cannot triage: third row, front middle) are refused,
-never guessed. Personal data of the document (names, contacts, persons) are not
+An unknown unit, a missing delta-V or a seat code that does not exist are
+refused, never guessed. Personal data of the document (names, contacts, persons) are not
 mapped and never logged; the document itself is kept with the case for audit.
 """
 
@@ -78,25 +79,17 @@ KM_PER_MILE: Final = Decimal(repr(units.KM_PER_MILE))
 
 
 #: VEDS seat location codes (VehicleSeatLocationCategoryCode) and the seats of
-#: the service; codes 6-8 (third row) and 9 (front row middle) have no seat here.
-SEAT_CODES: Final[dict[str, Seat | None]] = {
+#: the service: every code has one (the field risk model answers every seat).
+SEAT_CODES: Final[dict[str, Seat]] = {
     "1": Seat.DRIVER,
     "2": Seat.FRONT_PASSENGER,
     "3": Seat.REAR_LEFT,
     "4": Seat.REAR_MIDDLE,
     "5": Seat.REAR_RIGHT,
-    "6": None,
-    "7": None,
-    "8": None,
-    "9": None,
-}
-
-
-_SEAT_NAMES: Final = {
-    "6": "third row left",
-    "7": "third row middle",
-    "8": "third row right",
-    "9": "front row middle",
+    "6": Seat.THIRD_ROW_LEFT,
+    "7": Seat.THIRD_ROW_MIDDLE,
+    "8": Seat.THIRD_ROW_RIGHT,
+    "9": Seat.FRONT_MIDDLE,
 }
 
 
@@ -129,6 +122,8 @@ _MAX_DECIMAL_CHARS: Final = 64
 
 
 _SMALL_INT = re.compile(r"^\+?[0-9]{1,3}$")
+#: A model year (``nc:ItemModelYearDate``, an xs:gYear): four ASCII digits.
+_YEAR = re.compile(r"^[0-9]{4}$")
 
 
 _EVENT_ID = re.compile(r"^[\x21-\x7e]{1,128}$")
@@ -414,6 +409,7 @@ def _crash(
         },
         "multiple_impacts": multiple,
         "rollover": rollover,
+        "rollover_quarter_turns": turns if turns > 0 else None,
     }
 
 
@@ -470,13 +466,6 @@ def _occupants(m: _Mapper, vehicle: Element, vehicle_path: str) -> list[dict[str
             m.ignore(path, f"seat code {code} not occupied")
             continue
         seat = SEAT_CODES[code]
-        if seat is None:
-            raise _refuse(
-                code_path,
-                f"seat code {code} ({_SEAT_NAMES[code]}) is occupied, and the service triages "
-                "the front row (codes 1, 2) and the second row (3-5) only",
-                "veds_seat_unsupported",
-            )
         if seat in seen:
             raise _refuse(
                 code_path,
@@ -517,7 +506,8 @@ def _occupants(m: _Mapper, vehicle: Element, vehicle_path: str) -> list[dict[str
                 f"{vehicle_path}/veds:Airbag",
                 f"{prefix}.frontal_airbag",
                 "absent",
-                "second row: no frontal airbag in front of it",
+                f"{seat.value}: no frontal airbag in front of it (VEDS FRONT airbags are the "
+                "driver's and front passenger's)",
             )
         if side is not None:
             occupant["side_airbag"] = side.value
@@ -739,6 +729,10 @@ def read_veds(raw: bytes, *, received_at: datetime) -> VedsNotification:
         "crash": crash_doc,
         "occupants": occupants,
     }
+    year = vehicle_facts["model_year"]
+    if year is not None and _YEAR.match(year.strip()) and 1950 <= int(year.strip()) <= 2100:
+        document["vehicle"] = {"model_year": int(year.strip())}
+        m.map(f"{vehicle_path}/nc:ItemModelYearDate", "vehicle.model_year", int(year.strip()))
     try:
         notification = CrashNotificationIn.model_validate_json(json.dumps(document), strict=True)
     except ValidationError as exc:

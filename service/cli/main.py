@@ -13,7 +13,8 @@ Commands::
     aacn-triage build-surrogates [--family NAME] [--workers N] ...
     aacn-triage validate-surrogates [--n N] [--seed S] [--family NAME] ...
     aacn-triage baseline fit [--data CSV] [--out JSON]
-    aacn-triage fit-field [--out DIR] [--artifact JSON] [--cache DIR]
+    aacn-triage fit-field [--out DIR] [--artifact JSON] [--cache DIR] [--quick]
+    aacn-triage fit-field-mais3 [--out DIR] [--artifact JSON] [--cache DIR]
     aacn-triage evaluate FILE [--labels LABELS] [--out DIR] [--operating-point NAME]
                          [--workers N | --scheduler tcp://HOST:8786]
     aacn-triage cases rescore --model VERSION [--out FILE.csv] [--operating-point NAME]

@@ -131,7 +131,7 @@ def cmd_cases(args: argparse.Namespace) -> int:
     """``cases rescore``: the stored cases whose decision another field model would change."""
     from tqdm import tqdm
 
-    from models.field.model import artifact_for_version
+    from models.field.versions import artifact_for_version
     from service.context import engine_models_for
     from service.jobs.rescore import rescore, write_csv
 

@@ -205,8 +205,14 @@ HANDED_OVER: dict[str, tuple[str, str]] = {
         "score the surrogates on fresh direct LPM runs (resumable)",
     ),
     "fit-field": (
+        "models.offline.field.risk_command",
+        "fit the field risk models (ISS 15+, body regions, vehicle) on NASS-CDS 1997-2014, "
+        "validate them held out by crash and by year, write the artifact, model card and "
+        "README figures (resumable)",
+    ),
+    "fit-field-mais3": (
         "models.offline.field.command",
-        "fit the field risk model on real crashes, cross-validate, write the model card",
+        "refit the MAIS 3+ field model 2.0.0 (kept for recalls) and its model card",
     ),
 }
 

@@ -82,8 +82,11 @@ def test_in_coverage_occupants_are_answered_by_their_occupant_model(
     lo, hi = occ.triage.probability_ci95
     assert lo <= occ.triage.probability <= hi
     assert models.field is not None
-    assert occ.triage.threshold == models.field.threshold(FieldMode.FRONTAL)
-    assert occ.triage.outcome == "MAIS3+"
+    assert occ.triage.threshold == models.field.threshold()
+    assert occ.triage.outcome == "ISS15+"
+    assert occ.region_risk is not None
+    assert result.vehicle is not None
+    assert result.vehicle.probability >= occ.triage.probability * 0.5
     assert occ.triage.operating_point == models.field.default_operating_point
     assert occ.occupant_model is not None, "the occupant model's own decision is kept"
     assert occ.occupant_model.threshold == LPM_THRESHOLDS[ImpactMode.FRONTAL]
@@ -113,7 +116,7 @@ def test_out_of_coverage_occupants_get_the_field_model_and_a_note(models: Engine
     occ = result.occupants[0]
     assert occ.method is Method.FIELD
     assert not occ.impact.in_lpm_coverage
-    assert occ.triage.outcome == "MAIS3+"
+    assert occ.triage.outcome == "ISS15+"
     assert occ.occupant_model is None
     assert occ.iss is None
     assert occ.interval_method is None
@@ -276,7 +279,8 @@ def test_second_row_occupants_are_answered_by_the_field_model(
     assert rear.method is Method.FIELD
     assert rear.impact.mode is ImpactMode.FRONTAL
     assert not rear.impact.in_lpm_coverage
-    assert rear.triage.outcome == front.triage.outcome == "MAIS3+"
+    assert rear.triage.outcome == front.triage.outcome == "ISS15+"
+    assert rear.region_risk is not None
     assert rear.occupant_model is None
     assert any(f"{seat.value} seat" in a.message for a in result.assumptions)
 

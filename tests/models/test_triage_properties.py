@@ -42,7 +42,10 @@ def test_every_answer_is_a_consistent_decision(
     assert 0.0 <= lo <= hi <= 1.0
     assert d.iss15_plus == (d.probability >= d.threshold)
     assert lo <= d.probability <= hi, "the decided probability lies inside its interval"
-    assert d.outcome == "MAIS3+"
+    assert d.outcome == "ISS15+"
+    assert occ.region_risk is not None
+    for r in occ.region_risk.values():
+        assert r.ci95[0] <= r.probability <= r.ci95[1]
     if occ.method == "lpm":
         assert occ.probability_uncorrected is not None
         assert occ.probability_zero_load is not None

@@ -27,7 +27,8 @@ def test_each_documented_example_is_triaged_stored_and_read_back(
     assert any(o["triage"] == result["triage"] for o in result["occupants"])
     # the decided probability (field model) always lies in its interval
     assert lo <= result["triage"]["probability"] <= hi
-    assert result["triage"]["outcome"] == "MAIS3+"
+    assert result["triage"]["outcome"] == "ISS15+"
+    assert result["vehicle"]["outcome"] == "anyone ISS15+"
     assert result["models"]["baseline"]["sha256"]
     assert result["models"]["field_model"]["sha256"]
     for occ in result["occupants"]:
@@ -171,13 +172,14 @@ def test_a_notification_with_second_row_occupants_is_triaged_not_refused(
     assert response.status_code == 201, response.text
     result = response.json()
     assert [o["method"] for o in result["occupants"]] == ["lpm", "field", "field"]
-    assert (
-        sum(
-            "the occupant models are of the front row" in a["message"]
-            for a in result["assumptions"]
-        )
-        == 2
-    )
+    codes = [(a["code"], a["occupant"]) for a in result["assumptions"]]
+    assert ("seat_without_occupant_model", 1) in codes
+    assert ("seat_without_occupant_model", 2) in codes
+    # the 9-year-old is outside the field data (adults): said so
+    assert ("outside_field_population", 1) in codes
+    for o in result["occupants"]:
+        assert o["triage"]["outcome"] == "ISS15+"
+        assert len(o["region_risk"]) == 8
 
 
 def test_posture_and_seat_evidence_reach_the_answer(api: ApiClient) -> None:

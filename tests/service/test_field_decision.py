@@ -9,8 +9,7 @@ from pathlib import Path
 import pytest
 from fastapi.testclient import TestClient
 
-from models.field.features import FieldMode
-from models.field.model import canonical_content_sha256, default_artifact_path, load_default
+from models.field.risk_model import canonical_content_sha256, default_artifact_path, load_default
 from service.app import create_app
 from service.settings import Settings
 from tests.support import ApiClient, assert_problem, summary
@@ -29,8 +28,12 @@ def test_every_stored_case_records_the_field_model(api_any_db: ApiClient) -> Non
     assert field.sha256 == hashlib.sha256(default_artifact_path().read_bytes()).hexdigest()
     occ = result["occupants"][0]
     assert occ["triage"]["model"] == f"{field.name}@{field.version}"
-    assert occ["triage"]["outcome"] == "MAIS3+"
-    assert occ["triage"]["operating_point"] == "sens80_per_mode"
+    assert occ["triage"]["outcome"] == "ISS15+"
+    assert occ["triage"]["operating_point"] == "sens85"
+    assert occ["triage"]["threshold"] == field.threshold("sens85")
+    assert result["vehicle"]["model"] == f"{field.name}@{field.version}"
+    assert result["vehicle"]["heldout_auc"] == field.vehicle_heldout_auc
+    assert set(occ["region_risk"]) == set(field.regions)
     assert occ["field_mode"] == "frontal"
     stored = api_any_db.client.get(
         f"/v1/cases/{result['case_id']}", headers=api_any_db.headers("auditor")
@@ -63,7 +66,7 @@ def test_the_decision_responds_to_what_the_field_data_know(api: ApiClient) -> No
     assert p(age_years=80) > p(age_years=20)
 
 
-@pytest.mark.parametrize("operating_point", ["bahouth", "sens80"])
+@pytest.mark.parametrize("operating_point", ["acs_cot", "sens85"])
 def test_the_operating_point_is_configurable(tmp_path: Path, operating_point: str) -> None:
     settings = Settings(
         database_url=f"sqlite:///{tmp_path / 'a.db'}", operating_point=operating_point
@@ -83,10 +86,10 @@ def test_the_operating_point_is_configurable(tmp_path: Path, operating_point: st
         assert r.status_code == 201, r.text
         triage = r.json()["occupants"][0]["triage"]
         assert triage["operating_point"] == operating_point
-        expected = load_default().threshold(FieldMode.FRONTAL, operating_point)
+        expected = load_default().threshold(operating_point)
         assert triage["threshold"] == expected
-        if operating_point == "bahouth":
-            assert expected == 0.10
+        if operating_point == "acs_cot":
+            assert expected < load_default().threshold("sens85")
 
 
 def test_an_unknown_operating_point_leaves_the_service_not_ready(tmp_path: Path) -> None:
@@ -166,7 +169,6 @@ def test_the_readme_example_answers_over_http_as_the_readme_says(api: ApiClient)
     (models/offline/field/readme.py); the real HTTP path gives the same decision."""
     import json
 
-    from models.field.model import default_artifact_path
     from models.offline.field.readme import README_EXAMPLE, example_answer
 
     doc = json.loads(default_artifact_path().read_text(encoding="utf-8"))

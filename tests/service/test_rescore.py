@@ -1,9 +1,11 @@
 """`aacn-triage cases rescore`: the model recall report (issue 32).
 
-A database holds cases decided by the retired field model 1.0.0 (fitted on mph
-read as km/h), submitted through the real HTTP path. The report lists the cases
-whose decision the shipped version changes, with the old and new probability
-and decision, writes them as CSV, and leaves every stored record as it was.
+A database holds cases decided by a retired field model, submitted through the
+real HTTP path: 1.0.0 (fitted on mph read as km/h), recalled with its refit
+2.0.0; and 2.0.0 (MAIS 3+), recalled with the shipped ISS 15+ model 3.0.0 (issue
+38). The report lists the cases whose decision the other version changes, with
+the old and new probability and decision, writes them as CSV, and leaves every
+stored record as it was.
 """
 
 from __future__ import annotations
@@ -16,12 +18,9 @@ from typing import Any
 import pytest
 from sqlalchemy import select
 
-from models.field.model import (
-    WITHDRAWN_VERSIONS,
-    artifact_for_version,
-    artifact_versions,
-    load_default,
-)
+from models.field.model import WITHDRAWN_VERSIONS
+from models.field.risk_model import load_default
+from models.field.versions import artifact_for_version, artifact_versions
 from models.triage import load_engine_models
 from service.cases.veds import VEDS_MEDIA_TYPE
 from service.cli import main as cli
@@ -37,9 +36,17 @@ from tests.support import ApiClient, summary
 DELTA_V_KMH = (15.0, 25.0, 35.0, 40.0, 45.0, 55.0, 70.0, 90.0)
 
 RETIRED = "1.0.0"
+#: The MAIS 3+ refit, retired as the decision by the ISS 15+ model 3.0.0.
+MAIS3 = "2.0.0"
 
 #: VEDS test documents (tests/service/veds/).
 VEDS_DIR = Path(__file__).parent / "veds"
+
+
+@pytest.fixture
+def mais3_api(sqlite_url: str, tmp_path: Path) -> Iterator[ApiClient]:
+    """The service as it ran with field model 2.0.0 (MAIS 3+)."""
+    yield from _api(sqlite_url, tmp_path, field_artifact=artifact_for_version(MAIS3))
 
 
 @pytest.fixture
@@ -85,11 +92,13 @@ def _submit_cases(api: ApiClient) -> dict[str, dict[str, Any]]:
     return out
 
 
-def test_both_versions_are_shipped_and_the_default_is_the_refit() -> None:
+def test_every_version_is_shipped_and_the_default_is_the_iss15_model() -> None:
     versions = artifact_versions()
     assert RETIRED in versions
+    assert MAIS3 in versions
     assert load_default().version in versions
-    assert load_default().version != RETIRED
+    assert load_default().version not in (RETIRED, MAIS3)
+    assert load_default().outcome == "ISS15+"
     with pytest.raises(LookupError, match="shipped"):
         artifact_for_version("0.0.1")
 
@@ -121,16 +130,15 @@ def test_rescore_lists_the_changed_decisions_and_alters_nothing(old_api: ApiClie
     before = _snapshot(old_api)
 
     sessions = old_api.client.app.state.ctx.sessions  # type: ignore[attr-defined]
-    report = rescore(sessions, load_engine_models())
+    report = rescore(sessions, load_engine_models(field_artifact=artifact_for_version(MAIS3)))
     assert report.cases == len(DELTA_V_KMH) + 1
     assert not report.refused
-    new_version = load_default().version
     for row in report.rows:
         old = answered[row.case_id]["triage"]
         assert row.old_probability == old["probability"]
         assert row.old_decision == old["iss15_plus"]
         assert row.old_model == f"field_mais3@{RETIRED}"
-        assert row.new_model == f"field_mais3@{new_version}"
+        assert row.new_model == f"field_mais3@{MAIS3}"
     # the retired model read km/h as mph: it over-predicted every one of these cases
     assert all(r.new_probability < r.old_probability for r in report.rows)
     assert report.changed, "the 1.6x over-read must change some dispatch advice"
@@ -162,8 +170,7 @@ def test_the_command_prints_and_writes_the_changed_cases(
     get_settings.cache_clear()
     out = tmp_path / "recall.csv"
     try:
-        new_version = load_default().version
-        assert cli.main(["cases", "rescore", "--model", new_version, "--out", str(out)]) == 0
+        assert cli.main(["cases", "rescore", "--model", MAIS3, "--out", str(out)]) == 0
         printed = capsys.readouterr()
         assert cli.main(["cases", "rescore", "--model", "9.9.9", "--out", str(out)]) == 2
         assert "no field model artifact of version '9.9.9'" in capsys.readouterr().err
@@ -182,3 +189,45 @@ def test_the_command_prints_and_writes_the_changed_cases(
     assert f"{len(answered)} stored cases" in printed.err
     assert f"{len(rows)} decisions change" in printed.err
     assert _snapshot(old_api) == before
+
+
+def test_cases_decided_by_2_0_0_are_rescored_with_the_iss15_model(
+    mais3_api: ApiClient,
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """`cases rescore --model 3.0.0` on cases decided by 2.0.0 (P(MAIS 3+)): every case is
+    run again with the ISS 15+ model, the CSV lists old and new model, probability and
+    decision, and the stored records are untouched."""
+    answered = _submit_cases(mais3_api)
+    assert all(a["triage"]["model"] == f"field_mais3@{MAIS3}" for a in answered.values())
+    assert all(a["triage"]["outcome"] == "MAIS3+" for a in answered.values())
+    before = _snapshot(mais3_api)
+    new = load_default()
+    monkeypatch.setenv("AACN_DATABASE_URL", mais3_api.settings.database_url)
+    get_settings.cache_clear()
+    out = tmp_path / "recall.csv"
+    try:
+        code = cli.main(["cases", "rescore", "--model", new.version, "--all", "--out", str(out)])
+        assert code == 0
+        printed = capsys.readouterr()
+    finally:
+        get_settings.cache_clear()
+    with out.open(newline="", encoding="utf-8") as fh:
+        rows = list(csv.DictReader(fh))
+    assert len(rows) == len(answered)
+    engine = load_engine_models(field_artifact=artifact_for_version(new.version))
+    sessions = mais3_api.client.app.state.ctx.sessions  # type: ignore[attr-defined]
+    report = rescore(sessions, engine)
+    by_id = {r.case_id: r for r in report.rows}
+    for row in rows:
+        old = answered[row["case_id"]]["triage"]
+        assert row["old_model"] == f"field_mais3@{MAIS3}"
+        assert row["new_model"] == f"field_iss15@{new.version}"
+        assert float(row["old_probability"]) == pytest.approx(old["probability"], abs=5e-7)
+        again = by_id[row["case_id"]]
+        assert float(row["new_probability"]) == pytest.approx(again.new_probability, abs=5e-7)
+        assert row["new_decision"] == str(again.new_decision).lower()
+    assert f"{len(answered)} stored cases" in printed.err
+    assert _snapshot(mais3_api) == before, "the stored records are not altered"

@@ -71,6 +71,7 @@ def _codes(result: dict[str, Any]) -> set[str]:
 JSON_TWINS: dict[str, dict[str, Any]] = {
     "kph-frontal.xml": {
         "occurred_at": "2026-11-23T08:15:30Z",
+        "vehicle": {"model_year": 2010},
         "crash": {
             "pulse": {"kind": "summary", "delta_v_kmh": 32.18688, "pdof_deg": 0.0},
             "multiple_impacts": False,
@@ -93,11 +94,14 @@ JSON_TWINS: dict[str, dict[str, Any]] = {
     },
     "kph-rollover-two-pulses.xml": {
         "occurred_at": "2026-11-23T09:02:11+01:00",
+        "vehicle": {"model_year": 2012},
         "crash": {
             # the larger of the two pulses; both count as multiple impacts
             "pulse": {"kind": "summary", "delta_v_kmh": 48.3, "pdof_deg": 0.0},
             "multiple_impacts": True,
             "rollover": True,
+            # the most quarter turns of any pulse
+            "rollover_quarter_turns": 4,
         },
         "occupants": [
             # the FRONT airbags disagree: not deployed assumed for the front row
@@ -215,15 +219,57 @@ def test_the_rfc8148_example_is_triaged_stored_with_its_xml_and_replayed(api: Ap
     assert again.json()["case_id"] == result["case_id"]
 
 
-def test_the_veds_31_example_is_refused_for_its_front_middle_seat(api: ApiClient) -> None:
+def test_the_veds_31_example_is_answered_for_all_its_occupants(api: ApiClient) -> None:
+    """The public VEDS 3.1 example seats one occupant in the front middle (code 9) and one
+    in the front passenger seat: both get the field risk model's decision on ISS 15+, their
+    region risks, and the case the vehicle's P(anyone ISS 15+); the front middle occupant
+    has no occupant model, and the answer says so. Its 3 quarter turns and model year 2018
+    reach the field risk models."""
     r = _post_veds(api, _doc("veds-3.1-example.xml"))
-    problem = assert_problem(r, 422)
-    (error,) = problem["errors"]
-    assert error["field"] == (
-        "veds:Crash/veds:CrashVehicle/veds:VehicleSeat[1]/veds:VehicleSeatLocationCategoryCode"
+    assert r.status_code == 201, r.text
+    result = r.json()
+    seats = [o["seat"] for o in result["occupants"]]
+    assert seats == ["front_middle", "front_passenger"]
+    for o in result["occupants"]:
+        assert o["triage"]["outcome"] == "ISS15+"
+        assert o["triage"]["model"].startswith("field_iss15@")
+        assert set(o["region_risk"]) == {
+            "head",
+            "face",
+            "neck",
+            "thorax",
+            "abdomen",
+            "spine",
+            "upper_extremity",
+            "lower_extremity",
+        }
+    middle = result["occupants"][0]
+    assert middle["method"] == "field"
+    assert middle["occupant_model"] is None
+    codes = {(a["code"], a["occupant"]) for a in result["assumptions"]}
+    assert ("seat_without_occupant_model", 0) in codes
+    assert result["vehicle"]["outcome"] == "anyone ISS15+"
+    assert 0.0 < result["vehicle"]["probability"] < 1.0
+    stored = stored_case(api, result["case_id"])
+    assert stored["notification"]["crash"]["rollover_quarter_turns"] == 3
+    assert stored["notification"]["vehicle"]["model_year"] == 2018
+    assert not any(a["code"] == "quarter_turns_imputed" for a in result["assumptions"])
+    assert not any(a["code"] == "model_year_imputed" for a in result["assumptions"])
+
+
+def test_a_third_row_occupant_is_answered_by_the_field_risk_model(api: ApiClient) -> None:
+    raw = _doc("kph-frontal.xml").replace(
+        b">2</veds:VehicleSeatLocationCategoryCode>",
+        b">7</veds:VehicleSeatLocationCategoryCode>",
+        1,
     )
-    assert "front row middle" in error["reason"]
-    assert _case_count(api) == 0
+    r = _post_veds(api, raw)
+    assert r.status_code == 201, r.text
+    result = r.json()
+    third = [o for o in result["occupants"] if o["seat"] == "third_row_middle"]
+    assert len(third) == 1
+    assert third[0]["triage"]["outcome"] == "ISS15+"
+    assert third[0]["region_risk"]["head"]["ais_level"] == 3
 
 
 def test_json_cases_say_they_came_in_as_json(api: ApiClient) -> None:
@@ -302,12 +348,6 @@ _SEAT2 = "veds:Crash/veds:CrashVehicle/veds:VehicleSeat[2]"
             b">12</veds:VehicleSeatLocationCategoryCode>",
             f"{_SEAT2}/veds:VehicleSeatLocationCategoryCode",
             "veds_seat_code",
-        ),
-        (
-            b">2</veds:VehicleSeatLocationCategoryCode>",
-            b">7</veds:VehicleSeatLocationCategoryCode>",
-            f"{_SEAT2}/veds:VehicleSeatLocationCategoryCode",
-            "veds_seat_unsupported",
         ),
         (
             b">2</veds:VehicleSeatLocationCategoryCode>",

@@ -1,4 +1,9 @@
-"""``aacn-triage fit-field``: fit the field model, write its artifact and its model card.
+"""``aacn-triage fit-field-mais3``: refit the MAIS 3+ field model 2.0.0 (kept for recalls).
+
+The decision's model is the ISS 15+ field risk model (``aacn-triage fit-field``,
+:mod:`.risk_command`); this refits the MAIS 3+ model it replaced, its artifact
+(``--artifact``, default the shipped ``field_mais3.json``) and its model card
+(``docs/field/mais3/``).
 
 The orchestration of :mod:`.fit` (the fit and its cross-validation) and
 :mod:`.report` (the model card); neither imports this module.
@@ -12,19 +17,18 @@ from collections.abc import Sequence
 from pathlib import Path
 
 from models.offline.field.fit import FitConfig, fit_field, write_artifact
-from models.offline.field.readme import example_answer, readme_block, update_readme
 from models.offline.field.report import default_report_dir, write_model_card
 
 __all__ = ["main"]
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """``aacn-triage fit-field``: fit, write the artifact and the model card."""
+    """``aacn-triage fit-field-mais3``: refit 2.0.0, write the artifact and the model card."""
     parser = argparse.ArgumentParser(
-        prog="aacn-triage fit-field", description=__doc__.split("\n")[0]
+        prog="aacn-triage fit-field-mais3", description=__doc__.split("\n")[0]
     )
     parser.add_argument(
-        "--out", type=Path, default=None, help="report directory (default docs/field)"
+        "--out", type=Path, default=None, help="report directory (default docs/field/mais3)"
     )
     parser.add_argument(
         "--artifact", type=Path, default=None, help="artifact path (default: shipped)"
@@ -38,10 +42,6 @@ def main(argv: Sequence[str] | None = None) -> int:
     path = write_artifact(fit.artifact, args.artifact)
     card = write_model_card(fit, args.out or default_report_dir())
     sys.stderr.write(f"artifact: {path}\nmodel card: {card}\n")
-    if args.artifact is None and not args.quick:
-        # the shipped artifact: the README's figures and example answer follow it
-        readme = update_readme(readme_block(fit.artifact, example_answer(fit.artifact)))
-        sys.stderr.write(f"README figures: {readme or 'no README with the markers'}\n")
     return 0
 
 

@@ -26,6 +26,7 @@ from tqdm import tqdm
 from models.arrays import FloatArray
 from models.constants import Z_95
 from models.field.features import FieldMode
+from models.field.model import OperatingPoint
 from models.notification import CrashNotification
 from models.offline.field.metrics import (
     auc,
@@ -102,6 +103,11 @@ def score_chunk(
     return [_score(item) for item in items]
 
 
+def _threshold(op: OperatingPoint | float, mode: FieldMode) -> float:
+    """An operating point's threshold for `mode` (one per mode for 2.0.0, one for all on)."""
+    return op if isinstance(op, float) else op.thresholds[mode]
+
+
 def _score(item: tuple[CrashNotification, bool, float]) -> ScoredCase:
     notification, outcome, weight = item
     assert _WORKER_MODELS is not None
@@ -116,7 +122,9 @@ def _score(item: tuple[CrashNotification, bool, float]) -> ScoredCase:
         flagged=result.triage.iss15_plus,
         mode=worst.field_mode.value,
         by_operating_point={
-            name: any(o.triage.probability >= op.thresholds[o.field_mode] for o in result.occupants)
+            name: any(
+                o.triage.probability >= _threshold(op, o.field_mode) for o in result.occupants
+            )
             for name, op in field.operating_points.items()
         },
         weight=weight,

@@ -1,9 +1,9 @@
 """The README's figures of the decision, written from the field model artifact (never by hand).
 
 ``aacn-triage fit-field`` rewrites the block between :data:`BEGIN` and
-:data:`END` in ``README.md`` (:func:`update_readme`): the cross-validated table,
-the default operating point's held-out figures, the police-outcome check, the
-physics ablation, the extrapolation limit and the answer to the README's own
+:data:`END` in ``README.md`` (:func:`update_readme`): the held-out table, the
+temporal check, the default and ACS-COT operating points' held-out figures, the
+vehicle answer, the extrapolation limit and the answer to the README's own
 example notification. ``tests/models/field/test_readme_figures.py`` holds the
 README to what :func:`readme_block` renders from the shipped artifact, so the
 two cannot drift apart.
@@ -67,13 +67,6 @@ README_EXAMPLE: Final[dict[str, Any]] = {
         }
     ],
 }
-
-_ROWS: Final[tuple[tuple[str, str], ...]] = (
-    ("field", "the decision (field model)"),
-    ("plain", "plain logistic regression on the telematics fields"),
-    ("delta_v", "delta-V alone"),
-    ("occupant_models", "the occupant models' P(ISS >= 15), decided on before"),
-)
 
 
 def readme_path() -> Path:
@@ -153,63 +146,65 @@ def example_answer(doc: Mapping[str, Any]) -> dict[str, Any]:
     }
 
 
+def _score(s: Mapping[str, Any], label: str) -> str:
+    ci = s.get("auc_ci95")
+    auc = f"{s['auc']:.3f}" + (f" [{ci[0]:.3f}, {ci[1]:.3f}]" if ci else "")
+    po = s.get("p_over_o_weighted_ci95")
+    ratio = f"{s['p_over_o_weighted']:.2f}" + (f" [{po[0]:.2f}, {po[1]:.2f}]" if po else "")
+    return f"| {label} | {auc} | {s['auc_weighted']:.3f} | {ratio} | {s['slope_weighted']:.2f} |"
+
+
 def readme_block(doc: Mapping[str, Any], example: Mapping[str, Any]) -> str:
     """The README's generated block (markers included) from an artifact and the example's answer.
 
     Parameters
     ----------
     doc : mapping
-        The field model artifact document.
+        The field risk model artifact document (``models/field/artifacts/field_iss15.json``).
     example : mapping
         :func:`example_answer` of `doc`.
     """
-    cv = doc["cross_validated"]
-    cfg = doc["fit"]["config"]
+    iss = doc["outcomes"]["iss15"]
+    data = doc["data"]
     name = doc["default_operating_point"]
-    op = doc["operating_points"][name]["cross_validated"]
-    overall = op["overall"]
-    police = doc["police_validation"]
-    phys = cv["field_physics"]["auc"] - cv["field"]["auc"]
-    meas = cv["field_measures"]["auc"] - cv["field"]["auc"]
+    op = doc["operating_points"][name]["figures"]["heldout"]
+    acs = doc["operating_points"]["acs_cot"]["figures"]["heldout"]
+    t = iss["temporal"]
+    v = doc["vehicle"]["heldout"]
     lines = [
         BEGIN,
-        f"Field model `{doc['model']['name']}` {doc['model']['version']}, cross-validated on "
-        f"the calibration data ({cfg['n_splits']} folds x {cfg['n_repeats']} repeats, penalty "
-        "and thresholds chosen inside the training parts, 95 % intervals by bootstrap; "
-        "`docs/field/MODEL_CARD.md`):",
+        f"Field risk model `{doc['model']['name']}` {doc['model']['version']}: P(ISS 15+) "
+        f"fitted on NASS-CDS {data['years'][0]}-{data['years'][1]} ({data['rows']:,} adult "
+        f"occupants of {data['crashes']:,} crashes), calibrated with the national weights; "
+        f"held out by crash ({doc['config']['n_splits']} folds, the occupants of a crash never on "
+        "both sides; 95 % intervals by resampling crashes; `docs/field/MODEL_CARD.md`):",
         "",
-        "| score | AUC, mean of the repeats [95 % CI] | calibration slope |",
-        "|---|---|---|",
-    ]
-    for key, label in _ROWS:
-        s = cv[key]
-        slope = "-" if s["calibration"] is None else f"{s['calibration']['slope']:.2f}"
-        lines.append(
-            f"| {label} | {s['auc']:.3f} [{s['auc_ci95'][0]:.3f}, {s['auc_ci95'][1]:.3f}] "
-            f"| {slope} |"
-        )
-    cal = cv["field"]["calibration"]
-    lines += [
+        "| score | AUC [95 % CI] | AUC weighted | P/O weighted | slope weighted |",
+        "|---|---|---|---|---|",
+        _score(iss["heldout"], "the decision (field risk model)"),
+        _score(iss["plain"], "plain logistic regression, same fields"),
+        _score(iss["delta_v_alone"], "delta-V alone"),
+        _score(doc["comparisons"]["legacy_2_0_0"], "field model 2.0.0 (P(MAIS 3+))"),
         "",
-        f"Mean predicted P(MAIS 3+) {_pct(cal['mean_predicted'])} against "
-        f"{_pct(cal['observed_rate'])} observed. At `{name}` (the default), held out: "
-        f"sensitivity {_pct(overall['sensitivity'])} {_pct_ci(overall['sensitivity_ci95'])} "
-        f"with {_pct(overall['flagged'])} {_pct_ci(overall['flagged_ci95'])} of occupants "
-        f"flagged (PPV {_pct(overall['ppv'])}). On the police-reported outcome of NASS-CDS "
-        "1997-2000 (frontal), the survey-weighted AUC is "
-        f"{police['field_model_cv']['auc_weighted']:.3f} against "
-        f"{police['baseline_cv']['auc_weighted']:.3f} for the statistical baseline refitted "
-        "in the same folds. Adding the occupant models' P(ISS >= 15) or their injury "
-        "measures as features, with the models run at the true delta-V, changes the "
-        f"cross-validated AUC by {phys:+.3f} and {meas:+.3f} (intervals in the model card): "
-        "physics is not an input of the decision.",
+        f"Fitted on 1997-{doc['config']['temporal_cut']} and scored on the latest years "
+        f"({t['n']:,} occupants of {doc['config']['temporal_cut'] + 1}-{data['years'][1]}): AUC "
+        f"{t['auc']:.3f}, weighted predicted/observed {t['p_over_o_weighted']:.2f} "
+        f"[{t['p_over_o_weighted_ci95'][0]:.2f}, {t['p_over_o_weighted_ci95'][1]:.2f}]. At "
+        f"`{name}` (the default), held out: sensitivity {_pct(op['sensitivity'])} "
+        f"{_pct_ci(op['sensitivity_ci95'])} with {_pct(op['flagged_weighted'])} "
+        f"{_pct_ci(op['flagged_weighted_ci95'])} of US towaway-crash occupants flagged "
+        f"({_pct(op['flagged'])} of the NASS-CDS sample); `acs_cot` (under-triage <= 5 %): "
+        f"sensitivity {_pct(acs['sensitivity'])}, {_pct(acs['flagged_weighted'])} flagged. "
+        f"P(anyone in the vehicle ISS 15+): AUC {v['auc']:.3f} "
+        f"[{v['auc_ci95'][0]:.3f}, {v['auc_ci95'][1]:.3f}] on held-out vehicles (OnStar's "
+        "published vehicle-level figure, an anchor: 0.84).",
         "",
         "The example above answers "
-        f"P(MAIS 3+) = {example['probability']:.3f} "
-        f"[{example['probability_ci95'][0]:.3f}, {example['probability_ci95'][1]:.3f}] "
+        f"P(ISS 15+) = {example['probability']:.4f} "
+        f"[{example['probability_ci95'][0]:.4f}, {example['probability_ci95'][1]:.4f}] "
         f"against the threshold {example['threshold']:.4f} (`{example['model']}`, "
         f"`{example['operating_point']}`): {example['recommendation']} Delta-V above "
-        f"{doc['data']['delta_v_max_kmh']:.0f} km/h (the data's largest) is extrapolated "
+        f"{data['delta_v_max_kmh']:.0f} km/h (the data's largest) is extrapolated "
         "and said so (`delta_v_extrapolated`).",
         END,
     ]

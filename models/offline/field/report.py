@@ -1,7 +1,7 @@
 """The field model's card: what it is, how well it does on real crashes, where it stops.
 
 Written by ``aacn-triage fit-field`` (:func:`write_model_card`) beside its plots,
-under ``docs/field/`` by default. Every number in it comes from the fit's
+under ``docs/field/mais3/`` by default. Every number in it comes from the fit's
 cross-validation (:mod:`.fit`); its validation sections are the
 ``aacn-triage evaluate`` report (:mod:`.evaluate`) of the cross-validated
 predictions.
@@ -36,8 +36,9 @@ __all__ = ["default_report_dir", "risk_curve_plot", "write_model_card"]
 
 
 def default_report_dir() -> Path:
-    """``docs/field`` of the repository when run from a checkout, else ``./docs/field``."""
-    return docs_dir("field")
+    """``docs/field/mais3`` of the repository when run from a checkout (the MAIS 3+ model
+    2.0.0, kept for recalls; ``docs/field`` holds the decision's ISS 15+ model card)."""
+    return docs_dir("field", "mais3")
 
 
 def _f(x: float, nd: int = 3) -> str:

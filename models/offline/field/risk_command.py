@@ -54,6 +54,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     path = write_risk_artifact(fit.artifact, args.artifact)
     card = write_risk_model_card(fit, args.out or default_report_dir())
     sys.stderr.write(f"artifact: {path}\nmodel card: {card}\n")
+    if args.artifact is None and not args.quick:
+        # the shipped artifact: the README's figures and example answer follow it
+        from models.offline.field.readme import example_answer, readme_block, update_readme
+
+        readme = update_readme(readme_block(fit.artifact, example_answer(fit.artifact)))
+        sys.stderr.write(f"README figures: {readme or 'no README with the markers'}\n")
     return 0
 
 

@@ -399,7 +399,7 @@ def _card(doc: dict[str, Any]) -> str:
         f"# Field risk model card: `{doc['model']['name']}` {doc['model']['version']}",
         "",
         "Written by `aacn-triage fit-field` from the fit; do not edit by hand. The MAIS 3+ model "
-        "2.0.0 it replaces as the decision is described in `MODEL_CARD-2.0.0.md` and stays "
+        "2.0.0 it replaces as the decision is described in `mais3/MODEL_CARD.md` and stays "
         "loadable for recall reports (`aacn-triage cases rescore`).",
         "",
         "## What it is",
@@ -450,7 +450,9 @@ def _card(doc: dict[str, Any]) -> str:
         f"{_f(v['auc'])} {_ci(v['auc_ci95'])}, weighted {_f(v['auc_weighted'])} "
         f"{_ci(v['auc_weighted_ci95'])}; weighted P/O {_f(v['p_over_o_weighted'], 2)} "
         f"{_ci(v['p_over_o_weighted_ci95'], 2)}. Published anchor (not a target): OnStar's "
-        f"vehicle-level injury severity prediction, AUC {ONSTAR_VEHICLE_AUC:.2f}.",
+        f"vehicle-level injury severity prediction, AUC {ONSTAR_VEHICLE_AUC:.2f}. Served, the "
+        "vehicle's probability is never below its riskiest occupant's P(ISS 15+) (these "
+        "figures are of the recalibrated value before that floor).",
         "",
         "## Region risk (issue 39)",
         *_regions(doc),

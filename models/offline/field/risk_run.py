@@ -247,19 +247,45 @@ def _diff_ci(
     return [float(lo), float(hi)]
 
 
-def _bootstrap_refits(
-    d: RiskData, specs: dict[str, Spec], config: RiskConfig
+#: Bootstrap refits per cached chunk (an interrupted fit resumes at a chunk).
+BOOTSTRAP_CHUNK: Final[int] = 10
+
+
+def bootstrap_chunk(
+    d: RiskData, specs: dict[str, Spec], config: RiskConfig, chunk: int
 ) -> dict[str, tuple[FloatArray, FloatArray]]:
-    """Per outcome, ``(B, k)`` coefficients and ``(B, 2)`` calibrations of refits by crash."""
+    """Refits ``chunk * BOOTSTRAP_CHUNK ...`` of the bootstrap by crash, per outcome."""
     resamples = crash_resamples(d.crash, config.n_bootstrap, config.seed + 7)
+    part = resamples[chunk * BOOTSTRAP_CHUNK : (chunk + 1) * BOOTSTRAP_CHUNK]
     ys = {o.name: o.y for o in d.outcomes}
     out: dict[str, tuple[list[FloatArray], list[FloatArray]]] = {n: ([], []) for n in specs}
-    for ix in tqdm(resamples, desc="bootstrap refits by crash"):
+    for ix in tqdm(part, desc=f"bootstrap refits by crash ({chunk + 1})", leave=False):
         for name, spec in specs.items():
             f = fit_spec(d, ys[name], ix.astype(np.int64), spec, config)
             out[name][0].append(f.beta)
             out[name][1].append(np.array(f.calibration))
     return {n: (np.array(b), np.array(c)) for n, (b, c) in out.items()}
+
+
+def _bootstrap_refits(
+    d: RiskData, specs: dict[str, Spec], config: RiskConfig, cache: _Cache
+) -> dict[str, tuple[FloatArray, FloatArray]]:
+    """Per outcome, ``(B, k)`` coefficients and ``(B, 2)`` calibrations of refits by crash."""
+    chunks = []
+    n_chunks = -(-config.n_bootstrap // BOOTSTRAP_CHUNK)
+    for c in tqdm(range(n_chunks), desc="bootstrap refits by crash"):
+
+        def compute(c: int = c) -> dict[str, tuple[FloatArray, FloatArray]]:
+            return bootstrap_chunk(d, specs, config, c)
+
+        chunks.append(cache.get(f"bootstrap_{c}", compute))
+    return {
+        n: (
+            np.concatenate([ch[n][0] for ch in chunks]),
+            np.concatenate([ch[n][1] for ch in chunks]),
+        )
+        for n in specs
+    }
 
 
 def _file_sha256(path: Path) -> str:
@@ -310,7 +336,7 @@ def fit_risk(config: RiskConfig | None = None, cache_dir: Path | None = None) ->
 
         st["temporal"] = cache.get(f"temporal_ci_{o.name}", temporal)
     specs = {n: s["spec"] for n, s in stages.items()}
-    boot = cache.get("bootstrap", lambda: _bootstrap_refits(d, specs, cfg))
+    boot = _bootstrap_refits(d, specs, cfg, cache)
     doc = _document(d, cfg, drift, drift_table, stages, figures, boot)
     oof = {n: s["oof"] for n, s in stages.items()}
     return RiskFit(artifact=doc, figures=figures, oof=oof, data=d)

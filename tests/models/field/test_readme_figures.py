@@ -11,7 +11,7 @@ import json
 
 import pytest
 
-from models.field.model import default_artifact_path
+from models.field.risk_model import default_artifact_path
 from models.offline.field.readme import (
     BEGIN,
     END,
@@ -42,8 +42,9 @@ def test_the_readme_example_is_the_one_in_try_it() -> None:
     assert json.loads(curl) == README_EXAMPLE
 
 
-def test_the_example_is_no_longer_over_triaged(answer: dict[str, object]) -> None:
-    """A belted 42-year-old at 40 km/h with the airbag: 1.0.0 answered 0.23 (it read
-    40 km/h as 40 mph); NHTSA's all-crash curve gives 0.05 at 25 mph (40 km/h)."""
-    assert answer["model"] == f"field_mais3@{DOC['model']['version']}"
-    assert float(answer["probability"]) < 0.10  # type: ignore[arg-type]
+def test_the_example_is_answered_by_the_iss15_model(answer: dict[str, object]) -> None:
+    """A belted 42-year-old at 40 km/h with the airbag: 1.0.0 answered P(MAIS 3+) 0.23 (it
+    read 40 km/h as 40 mph); NHTSA's all-crash MAIS 3+ curve gives 0.05 at 25 mph (40 km/h),
+    and ISS 15+ is rarer than MAIS 3+."""
+    assert answer["model"] == f"field_iss15@{DOC['model']['version']}"
+    assert float(answer["probability"]) < 0.05  # type: ignore[arg-type]

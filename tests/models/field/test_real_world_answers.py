@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from models.field.model import load_default
+from models.field.risk_model import load_default
 from models.offline.field.rows import load_calibration_rows, row_notification
 from models.triage import EngineModels, Method, load_engine_models, triage
 
@@ -54,9 +54,9 @@ def test_the_answer_is_the_field_model_and_names_it(answers) -> None:  # type: i
         info = result.models["field_model"]
         assert (info.name, info.version, info.sha256) == (field.name, field.version, field.sha256)
         occ = result.occupants[0]
-        assert occ.triage.outcome == "MAIS3+"
+        assert occ.triage.outcome == "ISS15+"
         assert occ.triage.model == f"{field.name}@{field.version}"
-        assert occ.triage.threshold == field.threshold(occ.field_mode)
+        assert occ.triage.threshold == field.threshold()
 
 
 def test_the_decision_ranks_the_real_outcomes(answers) -> None:  # type: ignore[no-untyped-def]
