@@ -29,7 +29,7 @@ import hashlib
 import json
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from functools import lru_cache
+from functools import cached_property, lru_cache
 from pathlib import Path
 from typing import Any, Final
 
@@ -42,7 +42,6 @@ from models.field.risk_features import (
     ALL_COLUMNS,
     RiskImputation,
     RiskInputs,
-    crash_mode_codes,
     design_columns,
     inputs_arrays,
 )
@@ -239,17 +238,20 @@ class VehicleRisk:
     ci95: tuple[float, float]
 
 
-def _mode(f: RiskInputs) -> str:
-    if f.rollover:
-        return "rollover"
-    near, far, rear = (
-        float(v[0]) for v in crash_mode_codes(np.array([f.pdof_deg]), [f.seat_side.value])
-    )
-    if near:
-        return "near_side"
-    if far:
-        return "far_side"
-    return "rear" if rear else "frontal"
+def _modes(x_all: FloatArray, inputs: Sequence[RiskInputs]) -> list[str]:
+    """Crash mode of each occupant from its design row (rollover when reported)."""
+    col = {n: x_all[:, ALL_COLUMNS.index(n)] for n in ("near_side", "far_side", "rear")}
+    out = []
+    for i, f in enumerate(inputs):
+        if f.rollover:
+            out.append("rollover")
+        elif col["near_side"][i]:
+            out.append("near_side")
+        elif col["far_side"][i]:
+            out.append("far_side")
+        else:
+            out.append("rear" if col["rear"][i] else "frontal")
+    return out
 
 
 @dataclass(frozen=True, eq=False)
@@ -402,7 +404,7 @@ class RiskModel:
         arrays, imputed = inputs_arrays(inputs, self.imputation)
         return design_columns(arrays), imputed
 
-    @property
+    @cached_property
     def used_inputs(self) -> frozenset[str]:
         """The imputable inputs some outcome model uses (others are not named when unknown)."""
         cols = {ALL_COLUMNS[i] for m in (self.decision, *self.regions.values()) for i in m.columns}
@@ -420,27 +422,35 @@ class RiskModel:
             return []
         x, imputed = self.design(inputs)
         used = self.used_inputs
-        eta, boot = self.decision.logits(x)
-        region_logits = {r: m.logits(x) for r, m in self.regions.items()}
+        names = ("iss15", *self.regions)
+        models = (self.decision, *self.regions.values())
+        logits = [m.logits(x) for m in models]
+        eta = np.stack([e for e, _ in logits])  # (1 + regions, n)
+        sd = np.stack([np.std(b, axis=1, ddof=1) for _, b in logits])
+        p = _expit(eta)
+        lo = np.minimum(_expit(eta - Z_95 * sd), p).tolist()
+        hi = np.maximum(_expit(eta + Z_95 * sd), p).tolist()
+        pl, etal, sdl = p.tolist(), eta.tolist(), sd.tolist()
+        boot_p = _expit(logits[0][1])
+        levels = [3 if m.ais_level is None else m.ais_level for m in models]
+        modes = _modes(x, inputs)
         out = []
         for i, f in enumerate(inputs):
-            p, lo, hi, sd = _interval(float(eta[i]), boot[i])
-            regions = {}
-            for r, (e, b) in region_logits.items():
-                rp, rlo, rhi, _ = _interval(float(e[i]), b[i])
-                level = self.regions[r].ais_level
-                regions[r] = RegionRisk(rp, (rlo, rhi), 3 if level is None else level)
+            regions = {
+                names[k]: RegionRisk(pl[k][i], (lo[k][i], hi[k][i]), levels[k])
+                for k in range(1, len(names))
+            }
             out.append(
                 RiskPrediction(
-                    probability=p,
-                    ci95=(lo, hi),
-                    logit=float(eta[i]),
-                    logit_sd=sd,
-                    mode=_mode(f),
+                    probability=pl[0][i],
+                    ci95=(lo[0][i], hi[0][i]),
+                    logit=etal[0][i],
+                    logit_sd=sdl[0][i],
+                    mode=modes[i],
                     imputed=tuple(k for k in imputed[i] if k in used),
                     extrapolated=f.delta_v_kmh > self.delta_v_max_kmh,
                     regions=regions,
-                    bootstrap_probability=_expit(boot[i]),
+                    bootstrap_probability=boot_p[i],
                 )
             )
         return out

@@ -147,6 +147,10 @@ def _seat_xy(seat: str, drive_side: str) -> tuple[float, float]:
         "rear_left": (left, CAR_CY + 48.0),
         "rear_middle": (CAR_CX, CAR_CY + 48.0),
         "rear_right": (right, CAR_CY + 48.0),
+        "front_middle": (CAR_CX, CAR_CY - 14.0),
+        "third_row_left": (left, CAR_CY + 92.0),
+        "third_row_middle": (CAR_CX, CAR_CY + 92.0),
+        "third_row_right": (right, CAR_CY + 92.0),
     }.get(seat, (CAR_CX, CAR_CY))
 
 

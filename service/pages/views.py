@@ -85,6 +85,10 @@ SEAT_LABELS = {
     "rear_left": "Rear left",
     "rear_middle": "Rear middle",
     "rear_right": "Rear right",
+    "front_middle": "Front middle",
+    "third_row_left": "Third row left",
+    "third_row_middle": "Third row middle",
+    "third_row_right": "Third row right",
 }
 BODY_LABELS = {
     "male_50th": "50th percentile male (Hybrid III 50M)",
@@ -121,6 +125,12 @@ OUTCOME_LABELS = {
     "outcome (a proxy for ISS 15+).",
 }
 OUTCOME_SHORT = {"MAIS3+": "MAIS 3+", "ISS15+": "ISS 15+", "police_A+K": "police A+K"}
+#: The field risk model's ISS 15+ (3.0.0 on): a field-calibrated probability, not the
+#: occupant models' physics one.
+FIELD_ISS15_LABEL = (
+    "P(ISS 15+) of such occupants in US towaway crashes, fitted on real NASS-CDS crashes "
+    "1997-2014 and calibrated with the national weights (the trauma-center criterion)."
+)
 
 
 # ------------------------------------------------------------------ injury limits
@@ -303,7 +313,11 @@ def decision_view(triage: Mapping[str, Any] | None) -> DecisionView | None:
         threshold=threshold,
         outcome=outcome,
         outcome_short=OUTCOME_SHORT.get(outcome, outcome or "probability"),
-        outcome_text=OUTCOME_LABELS.get(outcome, outcome),
+        outcome_text=(
+            FIELD_ISS15_LABEL
+            if outcome == "ISS15+" and str(triage.get("model") or "").startswith("field_")
+            else OUTCOME_LABELS.get(outcome, outcome)
+        ),
         model=str(triage.get("model") or ""),
         operating_point=triage.get("operating_point"),
         bar=probability_bar(p, low, high, threshold),

@@ -83,7 +83,7 @@ def test_the_page_numbers_are_the_stored_case_numbers(api: ApiClient, make: Any)
     assert [_f(decision, "data-ci-low"), _f(decision, "data-ci-high")] == triage["probability_ci95"]
     assert _f(decision, "data-threshold") == triage["threshold"]
     assert decision.attrs["data-iss15-plus"] == str(triage["iss15_plus"]).lower()
-    assert decision.attrs["data-outcome"] == triage["outcome"] == "MAIS3+"
+    assert decision.attrs["data-outcome"] == triage["outcome"] == "ISS15+"
     shown = page.text(page.by_class("probability", within="decision")[0])
     assert shown == f"{100 * triage['probability']:.1f} %"
     low, high = triage["probability_ci95"]
@@ -92,7 +92,7 @@ def test_the_page_numbers_are_the_stored_case_numbers(api: ApiClient, make: Any)
     )
     verdict = page.text(page.by_class("verdict", within="decision")[0])
     assert verdict == ("TRAUMA CENTER" if triage["iss15_plus"] else "NO TRAUMA-CENTER INDICATION")
-    assert "stand-in for ISS 15+" in page.text(decision)
+    assert "US towaway crashes" in page.text(decision)
 
     for i, occ in enumerate(result["occupants"]):
         card = page.one(id=f"occupant-{i}")

@@ -260,8 +260,8 @@ def test_case_page_shows_the_recommendation_and_interval_without_console_errors(
     low, high = triage["probability_ci95"]
     assert decision.locator(".interval").inner_text() == f"{_pct(low)} to {_pct(high)}"
     assert decision.locator(".threshold-value").inner_text() == _pct(triage["threshold"])
-    assert "MAIS 3+" in decision.inner_text()
-    assert "stand-in for ISS 15+" in decision.inner_text()
+    assert "ISS 15+" in decision.inner_text()
+    assert "US towaway crashes" in decision.inner_text()
     assert "since the crash" in decision.locator(".since").inner_text()
     # the interval is drawn as a bar against the threshold
     ci = decision.locator("svg.pbar rect.ci")
