@@ -119,8 +119,10 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         summary="Advanced automatic crash notification triage per occupant, audited.",
         description=(
             "POST a crash notification; get, per occupant, a trauma-center recommendation "
-            "decided on a field-calibrated probability of MAIS 3+ (an AIS 3+ injury: the "
-            "stand-in for ISS 15+, fitted on real NASS-CDS crashes) with its 95% interval, "
+            "decided on a field-calibrated probability of ISS 15+ (the trauma-center "
+            "criterion, fitted on real NASS-CDS crashes 1997-2014 and calibrated to US towaway "
+            "crashes) with its 95% interval, the risk of a serious injury per body region, the "
+            "vehicle's P(anyone ISS 15+), "
             "the occupant models' physics that explains it (injury measures, region AIS, "
             "ISS, their own P(ISS >= 15)), and coded assumptions. Every case is stored for "
             "audit with the versions and checksums of its models. Errors are RFC 9457 "

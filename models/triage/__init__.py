@@ -2,10 +2,12 @@
 
 Flow per notification: the pulse is processed once (`models.pulse`); per
 occupant the impact mode is classified (`models.impact_mode`). The decision is
-the field risk model's (`models.field`): P(MAIS 3+), fitted on real NASS-CDS
-crashes, from what the notification carries (delta-V, crash mode incl.
-rollover, belt, age, sex, body mass index, multiple impacts), decided at the
-configured operating point. Occupants inside an occupant model's coverage are
+the field risk model's (`models.field.risk_model`): P(ISS 15+), fitted on real
+NASS-CDS crashes 1997-2014, from what the notification carries (delta-V and its
+direction, crash mode by seat, belt, frontal airbag, seat, age, stature, mass,
+rollover and quarter turns, multiple impacts, model year), decided at the
+configured operating point, with each body region's risk and the vehicle's
+P(anyone ISS 15+) beside it (a MAIS 3+ field model, 2.0.0, for recalls). Occupants inside an occupant model's coverage are
 also simulated by that model (`models.lpm`): its injury measures give region
 AIS, ISS and P(ISS >= 15) (`models.injury`), less the risk curves' zero-load
 floor (`models.risk_calibration`), with 95% intervals from the PCE surrogates
