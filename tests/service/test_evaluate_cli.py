@@ -102,7 +102,7 @@ def test_evaluate_scores_a_labelled_jsonl_as_the_service_answers(
     rates = triage_rates(y, flags)
     assert sens == pytest.approx(100 * rates.sensitivity, abs=0.05)
     assert flagged == pytest.approx(100 * rates.flagged, abs=0.05)
-    for name in ("sens80", "sens80_per_mode", "bahouth"):
+    for name in ("sens85", "acs_cot"):  # the shipped ISS 15+ model's operating points
         assert f"Operating point `{name}`" in report
     assert "calibration intercept" in report
 
