@@ -32,6 +32,7 @@ class AssumptionCode(StrEnum):
     SEX_IMPUTED = "sex_imputed"
     STATURE_MASS_IMPUTED = "stature_mass_imputed"
     MODEL_YEAR_IMPUTED = "model_year_imputed"
+    MODEL_YEAR_BEYOND_DATA = "model_year_beyond_data"
     QUARTER_TURNS_IMPUTED = "quarter_turns_imputed"
     OUTSIDE_FIELD_POPULATION = "outside_field_population"
     OUTSIDE_OCCUPANT_MODEL_COVERAGE = "outside_occupant_model_coverage"
@@ -101,6 +102,10 @@ DESCRIPTIONS: Final[dict[AssumptionCode, str]] = {
     AssumptionCode.MODEL_YEAR_IMPUTED: (
         "Vehicle model year unknown: the field risk models used the median model year of "
         "their latest accident year. Send it (VIN 10th character) when known."
+    ),
+    AssumptionCode.MODEL_YEAR_BEYOND_DATA: (
+        "A vehicle model year outside the field risk models' data (1980-2015): they take "
+        "the nearest year of the data (not extrapolated)."
     ),
     AssumptionCode.QUARTER_TURNS_IMPUTED: (
         "Rollover reported without its quarter turns: the field risk models used the median "

@@ -8,7 +8,7 @@ from dataclasses import dataclass
 from models.assumptions import Assumption, AssumptionCode
 from models.field.features import FieldInputs, field_inputs
 from models.field.model import FieldModel, FieldPrediction
-from models.field.risk_features import AirbagCode, RiskInputs, SeatSide
+from models.field.risk_features import MODEL_YEAR_CLAMP, AirbagCode, RiskInputs, SeatSide
 from models.field.risk_model import RiskModel, RiskPrediction
 from models.impact_mode import ImpactClassification, classify_impact, occupant_side
 from models.notification import (
@@ -237,7 +237,11 @@ def notification_risk_inputs(notification: CrashNotification) -> list[RiskInputs
 
 
 def _risk_assumptions(
-    index: int, occupant: Occupant, prediction: RiskPrediction, model: RiskModel
+    index: int,
+    occupant: Occupant,
+    inputs: RiskInputs,
+    prediction: RiskPrediction,
+    model: RiskModel,
 ) -> list[Assumption]:
     """What the field risk models assumed for one occupant, each named."""
     imp = model.imputation
@@ -281,6 +285,17 @@ def _risk_assumptions(
                 AssumptionCode.OUTSIDE_FIELD_POPULATION,
                 f"{who}: age {occupant.age_years:g}: the field risk models' data are of "
                 "occupants 16 or older; the probability is extrapolated",
+                index,
+            )
+        )
+    year = inputs.model_year
+    lo_year, hi_year = MODEL_YEAR_CLAMP
+    if year is not None and not lo_year <= year <= hi_year and "model_year" in model.used_inputs:
+        out.append(
+            Assumption(
+                AssumptionCode.MODEL_YEAR_BEYOND_DATA,
+                f"{who}: model year {year} is outside the field risk models' data "
+                f"({lo_year:.0f}-{hi_year:.0f}): they take {min(max(year, lo_year), hi_year):.0f}",
                 index,
             )
         )

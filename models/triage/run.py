@@ -143,14 +143,15 @@ def triage(notification: CrashNotification, models: EngineModels) -> TriageResul
         evidence = _occupant_evidence(i, occupant, notification, pulse, models, assumptions)
         tf = time.perf_counter()
         if isinstance(field_model, RiskModel):
-            risk = field_model.predict(risk_inputs(occupant, notification, pulse))
+            inputs = risk_inputs(occupant, notification, pulse)
+            risk = field_model.predict(inputs)
             risk_predictions.append(risk)
             decision = _risk_decision(field_model, models, risk)
             answered = dataclasses.replace(
                 _occupant_triage(occupant, evidence, decision, FieldMode(risk.mode)),
                 region_risk=risk.regions,
             )
-            assumptions.extend(_risk_assumptions(i, occupant, risk, field_model))
+            assumptions.extend(_risk_assumptions(i, occupant, inputs, risk, field_model))
         else:
             prediction = field_model.predict(evidence.field_inputs)
             decision = _field_decision(field_model, models, prediction)

@@ -351,3 +351,15 @@ def test_the_package_has_one_face() -> None:
     assert not missing
     assert face.triage.__module__ == "models.triage.run"
     assert face.simulate_notification.__module__ == "models.triage.simulation"
+
+
+def test_a_model_year_beyond_the_field_data_is_said(models: EngineModels) -> None:
+    """A 2024 vehicle: the field risk models take 2015, their newest model year, and say so."""
+    note = dataclasses.replace(_notification(40.0, 0.0), model_year=2024)
+    result = triage(note, models)
+    codes = [a.code.value for a in result.assumptions]
+    assert models.field is not None
+    if "model_year" in models.field.used_inputs:  # type: ignore[union-attr]
+        assert "model_year_beyond_data" in codes
+        same = triage(dataclasses.replace(note, model_year=2015), models)
+        assert same.triage.probability == result.triage.probability

@@ -1,6 +1,6 @@
 """The field risk fit's machinery: folds by crash, the recalibration, a reduced fit end to end.
 
-The reduced fit (a few percent of the crashes, 3 folds, 3 refits) runs the whole
+The reduced fit (15 % of the crashes, 3 folds, 3 refits) runs the whole
 tool as ``aacn-triage fit-field`` does and checks that the model card, the
 README block and the artifact agree: every figure they print is the artifact's.
 """
@@ -67,7 +67,7 @@ def test_a_reduced_fit_writes_an_artifact_card_and_readme_block_that_agree(
     from models.offline.field.risk_report import acceptance, write_risk_model_card
     from models.offline.field.risk_run import fit_risk
 
-    cfg = RiskConfig(subsample=0.06, n_splits=3, n_bootstrap=3, n_metric_bootstrap=10)
+    cfg = RiskConfig(subsample=0.15, n_splits=3, n_bootstrap=3, n_metric_bootstrap=10)
     fit = fit_risk(cfg, cache_dir=tmp_path / "cache")
     doc = fit.artifact
     model = RiskModel.from_document(doc)
