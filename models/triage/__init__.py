@@ -10,7 +10,8 @@ configured operating point, with each body region's risk and the vehicle's
 P(anyone ISS 15+) beside it (a MAIS 3+ field model, 2.0.0, for recalls).
 Occupants inside an occupant model's coverage are also simulated by that model
 (`models.lpm`): its injury measures give region AIS, ISS and P(ISS >= 15)
-(`models.injury`), less the risk curves' zero-load floor (`models.risk_calibration`), with 95% intervals from the PCE surrogates
+(`models.injury`), less the risk curves' zero-load floor
+(`models.risk_calibration`), with 95% intervals from the PCE surrogates
 (`models.surrogate`) when loaded, else from direct runs over the
 sensor-uncertainty box. That answer explains the decision (which body regions,
 which measures) and is kept with its own decision as a second opinion, as is the
