@@ -209,7 +209,7 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         },
         "triage_code": {
             "version": "0.2.0",
-            "sha256": "c442b9dc6ac377f847ba32de1526ef56489b163a34b8282f05de933505c67b02",
+            "sha256": "a272b72666cf9c354a37a8869e78a936404a4aece09c724aad0d34e54650dffc",
         },
         "risk_calibration": {
             "version": "1",
@@ -224,7 +224,12 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
             "sha256": "41f3094230e1b62c3af58ff6f138d5bcaace00ec3c3b74b66d8a53bd6e5365cd",
         },
     },
-    "timings_ms": {"pulse": 0.13, "occupants": 91.02, "field_model": 1.317, "engine_total": 91.15},
+    "timings_ms": {
+        "pulse": 0.08406,
+        "occupants": 45.09,
+        "field_model": 0.7938,
+        "engine_total": 45.17,
+    },
     "stored": True,
     "spooled": False,
 }
