@@ -36,7 +36,7 @@ from models.injury.risk import (
     VC_TOLERANCE_VIANO_1989_ABDOMEN,
     VC_TOLERANCE_VIANO_1989_CHEST,
 )
-from models.notification import Body
+from models.notification import Body, Seat
 from service.db.repository import CaseRecord
 from service.pages.drawing import (
     BODY_REGIONS,
@@ -79,17 +79,8 @@ def render(template: str, **context: Any) -> str:
 
 # ------------------------------------------------------------------ labels
 
-SEAT_LABELS = {
-    "driver": "Driver",
-    "front_passenger": "Front passenger",
-    "rear_left": "Rear left",
-    "rear_middle": "Rear middle",
-    "rear_right": "Rear right",
-    "front_middle": "Front middle",
-    "third_row_left": "Third row left",
-    "third_row_middle": "Third row middle",
-    "third_row_right": "Third row right",
-}
+#: "Driver", "Front passenger", "Rear left", ..., "Third row middle", "Front middle".
+SEAT_LABELS = {s.value: s.value.replace("_", " ").capitalize() for s in Seat}
 BODY_LABELS = {
     "male_50th": "50th percentile male (Hybrid III 50M)",
     "female_5th": "5th percentile female (Hybrid III 5F)",
