@@ -42,6 +42,14 @@ def main(argv: Sequence[str] | None = None) -> int:
     )
     parser.add_argument("--no-cache", action="store_true", help="recompute every stage")
     parser.add_argument(
+        "--heldout-csv",
+        type=Path,
+        default=None,
+        help="also write every occupant's held-out (out-of-fold) probabilities, keyed by "
+        "year, psu, caseno, vehno, occno (columns iss15, region_risk_<region>): the region "
+        "report's --region-risk input",
+    )
+    parser.add_argument(
         "--quick", action="store_true", help="a fifth of the crashes, few refits (a smoke run)"
     )
     args = parser.parse_args(argv)
@@ -54,6 +62,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     path = write_risk_artifact(fit.artifact, args.artifact)
     card = write_risk_model_card(fit, args.out or default_report_dir())
     sys.stderr.write(f"artifact: {path}\nmodel card: {card}\n")
+    if args.heldout_csv is not None:
+        keys = fit.data.rows[["year", "psu", "caseno", "vehno", "occno"]].copy()
+        for name, p in fit.oof.items():
+            keys[name if name == "iss15" else name.replace("region_", "region_risk_")] = p
+        args.heldout_csv.parent.mkdir(parents=True, exist_ok=True)
+        keys.to_csv(args.heldout_csv, index=False)
+        sys.stderr.write(f"held-out probabilities: {args.heldout_csv}\n")
     if args.artifact is None and not args.quick:
         # the shipped artifact: the README's figures and example answer follow it
         from models.offline.field.readme import example_answer, readme_block, update_readme
