@@ -79,7 +79,10 @@ def test_usable_rows_follow_the_rules(frame: pd.DataFrame) -> None:
     assert len(rows) == int(usable_mask(frame).sum())
     assert 45_000 < len(rows) < 55_000
     assert all(r.age_years >= MIN_AGE_YEARS for r in rows)
-    assert {r.seat for r in rows} == set(Seat)
+    # the front outboard and second-row seats (the ones these rows take); the wire's
+    # front middle and third-row seats (issue 38) need not be among them
+    five = {Seat.DRIVER, Seat.FRONT_PASSENGER, Seat.REAR_LEFT, Seat.REAR_MIDDLE, Seat.REAR_RIGHT}
+    assert five <= {r.seat for r in rows} <= set(Seat)
     assert all(0.0 <= r.pdof_deg < 360.0 and r.delta_v_kmh > 0 for r in rows)
     assert len({r.key for r in rows}) == len(rows)
     outcomes = outcome_frame()
