@@ -439,7 +439,8 @@ def submit(
     return SubmitOutcome(result=result, replayed=False)
 
 
-def _stored(case: Case) -> StoredCase:
+def stored_case(case: Case) -> StoredCase:
+    """The wire form of a stored case row (also the NEMSIS export's input)."""
     return StoredCase(
         case_id=case.id,
         event_id=case.event_id,
@@ -462,7 +463,7 @@ def get_case(ctx: ServiceContext, case_id: str) -> StoredCase:
         case = repository.get_case(session, case_id)
         if case is None:
             raise NotFound(f"No case with id {case_id!r}.")
-        return _stored(case)
+        return stored_case(case)
 
 
 def load_case_record(sessions: sessionmaker[Session], case_id: str) -> CaseRecord | None:

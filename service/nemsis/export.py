@@ -26,7 +26,7 @@ from typing import Final
 from sqlalchemy.orm import Session, sessionmaker
 
 from service.cases.result import StoredCase
-from service.cases.service import _stored as stored_case
+from service.cases.service import stored_case
 from service.db import repository
 from service.nemsis.mapping import Agency, NemsisRecord
 from service.nemsis.service import NemsisRecordInvalid, checked_record
