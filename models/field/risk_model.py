@@ -38,6 +38,7 @@ import numpy as np
 from models.arrays import FloatArray
 from models.codehash import source_tree_sha256
 from models.constants import Z_95
+from models.field.model import canonical_content_sha256  # one rule for both kinds
 from models.field.risk_features import (
     ALL_COLUMNS,
     RiskImputation,
@@ -99,13 +100,6 @@ def feature_code_sha256() -> str:
     """Checksum of the normalised code that builds the features."""
     root = Path(__file__).resolve().parents[1]
     return source_tree_sha256([root / rel for rel in _FEATURE_SOURCES])
-
-
-def canonical_content_sha256(doc: Mapping[str, Any]) -> str:
-    """SHA-256 of an artifact document without its ``content_sha256`` (canonical JSON)."""
-    body = {k: v for k, v in doc.items() if k != "content_sha256"}
-    text = json.dumps(body, sort_keys=True, separators=(",", ":"), allow_nan=False)
-    return hashlib.sha256(text.encode()).hexdigest()
 
 
 class _ArtifactError(ValueError):
