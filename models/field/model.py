@@ -51,8 +51,6 @@ from models.notification import Sex
 __all__ = [
     "ARTIFACT_SCHEMA",
     "WITHDRAWN_VERSIONS",
-    "artifact_for_version",
-    "artifact_versions",
     "OUTCOME",
     "FieldModel",
     "FieldPrediction",
@@ -377,46 +375,6 @@ WITHDRAWN_VERSIONS: Final[Mapping[str, str]] = {
         "times its delta-V and over-triages (issue 32; refitted as 2.0.0)"
     ),
 }
-
-
-def artifact_versions() -> dict[str, Path]:
-    """Every field model artifact shipped in the package, by version.
-
-    The shipped one (``field_mais3.json``) and the retired versions kept beside
-    it as ``field_mais3-<version>.json`` (byte for byte as they decided cases,
-    so that their checksums match the stored cases'), for recall reports
-    (``aacn-triage cases rescore``). Versions are read from the files.
-
-    Returns
-    -------
-    dict of str to Path
-    """
-    root = default_artifact_path().parent
-    out: dict[str, Path] = {}
-    for path in sorted(root.glob(f"{Path(_ARTIFACT_FILE).stem}*.json")):
-        try:
-            version = json.loads(path.read_text(encoding="utf-8"))["model"]["version"]
-        except (OSError, ValueError, KeyError, TypeError):
-            continue
-        out[str(version)] = path
-    return out
-
-
-def artifact_for_version(version: str) -> Path:
-    """The shipped or retired artifact of field model `version`.
-
-    Raises
-    ------
-    LookupError
-        No artifact of that version is shipped (the message lists those that are).
-    """
-    versions = artifact_versions()
-    if version not in versions:
-        raise LookupError(
-            f"no field model artifact of version {version!r}; shipped: "
-            + ", ".join(sorted(versions))
-        )
-    return versions[version]
 
 
 def load_default() -> FieldModel:

@@ -19,7 +19,7 @@ from tqdm import tqdm
 
 from models.arrays import FloatArray, IntArray
 from models.field.features import FieldInputs, FieldMode
-from models.field.model import FieldModel, artifact_for_version
+from models.field.model import FieldModel
 from models.field.risk_features import ALL_COLUMNS, FEATURE_GROUPS
 from models.field.risk_model import (
     ARTIFACT_SCHEMA,
@@ -27,6 +27,7 @@ from models.field.risk_model import (
     canonical_content_sha256,
     feature_code_sha256,
 )
+from models.field.versions import artifact_for_version
 from models.offline.field.metrics import threshold_for_sensitivity
 from models.offline.field.occupants import OCCUPANTS_CSV, POPULATION_RULES
 from models.offline.field.published import NHTSA_ALL

@@ -11,7 +11,8 @@ from __future__ import annotations
 import pytest
 
 from models.field.features import FieldInputs
-from models.field.model import FieldModel, artifact_for_version, load_default
+from models.field.model import FieldModel, load_default
+from models.field.versions import artifact_for_version
 from models.offline.field.fit import calibration_design
 from models.offline.field.published import (
     AUGENSTEIN_MAIS3_AT_30_MPH,
