@@ -55,7 +55,9 @@ __all__ = [
     "FieldModel",
     "FieldPrediction",
     "OperatingPoint",
+    "ArtifactError",
     "canonical_content_sha256",
+    "verified_document",
     "default_artifact_path",
     "feature_code_sha256",
     "load_default",
@@ -136,20 +138,50 @@ class FieldPrediction:
     extrapolated: bool
 
 
-class _ArtifactError(ValueError):
-    pass
+class ArtifactError(ValueError):
+    """A field model artifact (either kind) that is malformed, altered or stale: the reason."""
 
 
 def _get(obj: Any, key: str) -> Any:
     if not isinstance(obj, dict) or key not in obj:
-        raise _ArtifactError(f"missing `{key}`")
+        raise ArtifactError(f"missing `{key}`")
     return obj[key]
+
+
+def verified_document(raw: bytes, *, schema: str, feature_sha256: str) -> dict[str, Any]:
+    """A field model artifact's JSON object, its schema, content and feature code checked.
+
+    Parameters
+    ----------
+    raw : bytes
+        The artifact file's bytes.
+    schema : str
+        The ``schema`` the artifact must declare (each kind has its own).
+    feature_sha256 : str
+        The checksum of the feature code the artifact must have been fitted for.
+
+    Raises
+    ------
+    ArtifactError
+        Not UTF-8 JSON, another schema, altered content or stale feature code.
+    """
+    try:
+        doc = json.loads(raw.decode("utf-8"))
+    except (UnicodeDecodeError, json.JSONDecodeError) as exc:
+        raise ArtifactError(f"not valid UTF-8 JSON ({exc})") from None
+    if not isinstance(doc, dict) or doc.get("schema") != schema:
+        raise ArtifactError(f"`schema` must be {schema!r}")
+    if _get(doc, "content_sha256") != canonical_content_sha256(doc):
+        raise ArtifactError("content checksum mismatch (the artifact was altered)")
+    if _get(doc, "feature_code_sha256") != feature_sha256:
+        raise ArtifactError("stale: fitted for other feature code; run `aacn-triage fit-field`")
+    return doc
 
 
 def _vector(value: Any, n: int, where: str) -> FloatArray:
     arr = np.array(value, dtype=np.float64)
     if arr.shape != (n,) or not np.all(np.isfinite(arr)):
-        raise _ArtifactError(f"`{where}` must be {n} finite numbers")
+        raise ArtifactError(f"`{where}` must be {n} finite numbers")
     return arr
 
 
@@ -225,7 +257,7 @@ class FieldModel:
         raw = p.read_bytes()
         try:
             return cls._from_bytes(raw)
-        except _ArtifactError as exc:
+        except ArtifactError as exc:
             raise ValueError(f"field model artifact {p}: {exc}") from None
 
     @classmethod
@@ -240,38 +272,27 @@ class FieldModel:
         raw = json.dumps(doc, indent=1, allow_nan=False).encode()
         try:
             return cls._from_bytes(raw)
-        except _ArtifactError as exc:
+        except ArtifactError as exc:
             raise ValueError(f"field model document: {exc}") from None
 
     @classmethod
     def _from_bytes(cls, raw: bytes) -> FieldModel:
-        try:
-            doc = json.loads(raw.decode("utf-8"))
-        except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-            raise _ArtifactError(f"not valid UTF-8 JSON ({exc})") from None
-        if not isinstance(doc, dict) or doc.get("schema") != ARTIFACT_SCHEMA:
-            raise _ArtifactError(f"`schema` must be {ARTIFACT_SCHEMA!r}")
-        if _get(doc, "content_sha256") != canonical_content_sha256(doc):
-            raise _ArtifactError("content checksum mismatch (the artifact was altered)")
-        if _get(doc, "feature_code_sha256") != feature_code_sha256():
-            raise _ArtifactError(
-                "stale: fitted for other feature code; run `aacn-triage fit-field`"
-            )
+        doc = verified_document(raw, schema=ARTIFACT_SCHEMA, feature_sha256=feature_code_sha256())
         if tuple(_get(doc, "feature_names")) != FEATURE_NAMES:
-            raise _ArtifactError(f"`feature_names` must be {list(FEATURE_NAMES)}")
+            raise ArtifactError(f"`feature_names` must be {list(FEATURE_NAMES)}")
         k = len(FEATURE_NAMES)
         coef = _vector(_get(doc, "coefficients"), k, "coefficients")
         boot = np.array(_get(doc, "bootstrap_coefficients"), dtype=np.float64)
         if boot.ndim != 2 or boot.shape[1] != k or boot.shape[0] < 2:
-            raise _ArtifactError("`bootstrap_coefficients` must be B >= 2 rows of k numbers")
+            raise ArtifactError("`bootstrap_coefficients` must be B >= 2 rows of k numbers")
         if not np.all(np.isfinite(boot)):
-            raise _ArtifactError("`bootstrap_coefficients` must be finite")
+            raise ArtifactError("`bootstrap_coefficients` must be finite")
         sex = _get(doc, "sex_offset")
         b_sex = float(_get(sex, "log_odds_ratio_female"))
         sex_boot = _vector(_get(sex, "bootstrap"), boot.shape[0], "sex_offset.bootstrap")
         share = float(_get(sex, "female_share"))
         if not (math.isfinite(b_sex) and 0.0 <= share <= 1.0):
-            raise _ArtifactError("`sex_offset` must hold a finite log odds ratio and a share")
+            raise ArtifactError("`sex_offset` must hold a finite log odds ratio and a share")
         imp = _get(doc, "imputation")
         imputation = Imputation(
             age_years=float(_get(imp, "age_years")), bmi=float(_get(imp, "bmi"))
@@ -282,13 +303,13 @@ class FieldModel:
             if set(thresholds) != set(FieldMode) or not all(
                 0.0 < t < 1.0 for t in thresholds.values()
             ):
-                raise _ArtifactError(f"operating point {name!r}: a threshold in (0, 1) per mode")
+                raise ArtifactError(f"operating point {name!r}: a threshold in (0, 1) per mode")
             points[name] = OperatingPoint(
                 name=name, description=str(_get(op, "description")), thresholds=thresholds
             )
         default = _get(doc, "default_operating_point")
         if default not in points:
-            raise _ArtifactError(f"default operating point {default!r} is not defined")
+            raise ArtifactError(f"default operating point {default!r} is not defined")
         model = _get(doc, "model")
         return cls(
             name=str(_get(model, "name")),

@@ -38,7 +38,11 @@ import numpy as np
 from models.arrays import FloatArray
 from models.codehash import source_tree_sha256
 from models.constants import Z_95
-from models.field.model import canonical_content_sha256  # one rule for both kinds
+from models.field.model import (  # one artifact check for both kinds
+    ArtifactError,
+    canonical_content_sha256,
+    verified_document,
+)
 from models.field.risk_features import (
     ALL_COLUMNS,
     RiskImputation,
@@ -102,13 +106,9 @@ def feature_code_sha256() -> str:
     return source_tree_sha256([root / rel for rel in _FEATURE_SOURCES])
 
 
-class _ArtifactError(ValueError):
-    pass
-
-
 def _get(obj: Any, key: str) -> Any:
     if not isinstance(obj, dict) or key not in obj:
-        raise _ArtifactError(f"missing `{key}`")
+        raise ArtifactError(f"missing `{key}`")
     return obj[key]
 
 
@@ -118,7 +118,7 @@ def _matrix(value: Any, shape: tuple[int, ...], where: str) -> FloatArray:
         s in (-1, a) for s, a in zip(shape, arr.shape, strict=False)
     )
     if not ok or not np.all(np.isfinite(arr)):
-        raise _ArtifactError(f"`{where}` must be finite numbers of shape {shape}")
+        raise ArtifactError(f"`{where}` must be finite numbers of shape {shape}")
     arr.setflags(write=False)
     return arr
 
@@ -298,7 +298,7 @@ class RiskModel:
         p = Path(path)
         try:
             return cls._from_bytes(p.read_bytes())
-        except _ArtifactError as exc:
+        except ArtifactError as exc:
             raise ValueError(f"field risk artifact {p}: {exc}") from None
 
     @classmethod
@@ -307,21 +307,21 @@ class RiskModel:
         raw = json.dumps(doc, indent=1, allow_nan=False).encode()
         try:
             return cls._from_bytes(raw)
-        except _ArtifactError as exc:
+        except ArtifactError as exc:
             raise ValueError(f"field risk document: {exc}") from None
 
     @staticmethod
     def _outcome(name: str, od: Any) -> OutcomeModel:
         names = list(_get(od, "columns"))
         if not names or names[0] != "intercept" or not set(names) <= set(ALL_COLUMNS):
-            raise _ArtifactError(f"outcome {name!r}: `columns` must be known, intercept first")
+            raise ArtifactError(f"outcome {name!r}: `columns` must be known, intercept first")
         k = len(names)
         beta = _matrix(_get(od, "coefficients"), (k,), f"{name}.coefficients")
         boot = _matrix(_get(od, "bootstrap_coefficients"), (-1, k), f"{name}.bootstrap")
         cal = _matrix(_get(od, "calibration"), (2,), f"{name}.calibration")
         bcal = _matrix(_get(od, "bootstrap_calibration"), (boot.shape[0], 2), f"{name}.bcal")
         if boot.shape[0] < 2:
-            raise _ArtifactError(f"outcome {name!r}: at least 2 bootstrap refits")
+            raise ArtifactError(f"outcome {name!r}: at least 2 bootstrap refits")
         level = od.get("ais_level")
         return OutcomeModel(
             name=name,
@@ -336,20 +336,9 @@ class RiskModel:
 
     @classmethod
     def _from_bytes(cls, raw: bytes) -> RiskModel:
-        try:
-            doc = json.loads(raw.decode("utf-8"))
-        except (UnicodeDecodeError, json.JSONDecodeError) as exc:
-            raise _ArtifactError(f"not valid UTF-8 JSON ({exc})") from None
-        if not isinstance(doc, dict) or doc.get("schema") != ARTIFACT_SCHEMA:
-            raise _ArtifactError(f"`schema` must be {ARTIFACT_SCHEMA!r}")
-        if _get(doc, "content_sha256") != canonical_content_sha256(doc):
-            raise _ArtifactError("content checksum mismatch (the artifact was altered)")
-        if _get(doc, "feature_code_sha256") != feature_code_sha256():
-            raise _ArtifactError(
-                "stale: fitted for other feature code; run `aacn-triage fit-field`"
-            )
+        doc = verified_document(raw, schema=ARTIFACT_SCHEMA, feature_sha256=feature_code_sha256())
         if tuple(_get(doc, "candidate_columns")) != ALL_COLUMNS:
-            raise _ArtifactError("`candidate_columns` differ from the feature code's")
+            raise ArtifactError("`candidate_columns` differ from the feature code's")
         outs = _get(doc, "outcomes")
         decision = cls._outcome("iss15", _get(outs, "iss15"))
         regions = {r: cls._outcome(f"region_{r}", _get(outs, f"region_{r}")) for r in REGION_NAMES}
@@ -367,10 +356,10 @@ class RiskModel:
         points = _get(doc, "operating_points")
         thresholds = {str(n): float(_get(op, "threshold")) for n, op in points.items()}
         if not all(0.0 < t < 1.0 for t in thresholds.values()):
-            raise _ArtifactError("operating point thresholds must be in (0, 1)")
+            raise ArtifactError("operating point thresholds must be in (0, 1)")
         default = _get(doc, "default_operating_point")
         if default not in thresholds:
-            raise _ArtifactError(f"default operating point {default!r} is not defined")
+            raise ArtifactError(f"default operating point {default!r} is not defined")
         model = _get(doc, "model")
         return cls(
             name=str(_get(model, "name")),
