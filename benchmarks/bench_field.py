@@ -1,18 +1,19 @@
-"""Field model benchmark: its cost per occupant before and after 3.0.0, and the engine beside it.
+"""Field model benchmark: its cost per occupant across versions, and the engine beside it.
 
 Run: ``python benchmarks/bench_field.py [--n N] [--no-write]``. Prints the figures
 and rewrites the "Field risk model" section of ``benchmarks/RESULTS.md``.
 
 Inputs: N calibration rows (seeded draw) as the service builds them. Timed, one
 occupant at a time: ``FieldModel.predict`` of 2.0.0 (MAIS 3+: design row, 200
-bootstrap refits, interval; before) and ``RiskModel.predict`` of 3.0.0 (ISS 15+
-and eight region risks, each with its bootstrap refits and interval; after),
+bootstrap refits, interval), ``RiskModel.predict`` of 3.0.0 (ISS 15+ and eight
+region risks, regressions with their bootstrap refits; before) and of the
+shipped version (3.1.0: bags of boosted trees where the fit chose them; after),
 each with the decision at the default operating point; batch throughput of
-both (occupants per second, all N at once: ``RiskModel.predict_many`` is
+each (occupants per second, all N at once: ``RiskModel.predict_many`` is
 vectorised over occupants); and, on the same notifications, the whole
-``models.triage.triage`` with its ``field_model`` timing (3.0.0 with the
-vehicle answer), so that the field model's share of a request is measured in
-one run.
+``models.triage.triage`` with its ``field_model`` timing (the shipped version
+with the vehicle answer), so that the field model's share of a request is
+measured in one run.
 """
 
 from __future__ import annotations
@@ -28,7 +29,7 @@ import numpy as np
 from results_md import RESULTS, write_section
 
 from models.field.model import FieldModel
-from models.field.risk_model import load_default
+from models.field.risk_model import RiskModel, load_default
 from models.field.versions import artifact_for_version
 from models.offline.field.rows import load_calibration_rows, row_notification
 from models.triage import load_engine_models, notification_field_inputs, triage
@@ -40,6 +41,13 @@ def _stats(samples_ms: list[float]) -> tuple[float, float]:
     return statistics.median(s), s[min(len(s) - 1, round(0.99 * (len(s) - 1)))]
 
 
+def _kinds(model: RiskModel) -> str:
+    """Which outcomes are bags of boosted trees."""
+    outs = model.document["outcomes"]
+    boosted = [n.removeprefix("region_") for n, o in outs.items() if o.get("kind") == "boosted"]
+    return "ISS 15+ and 8 regions; boosted: " + (", ".join(boosted) or "none")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--n", type=int, default=400, help="notifications")
@@ -47,6 +55,7 @@ def main() -> None:
     args = parser.parse_args()
 
     old = FieldModel.from_artifact(artifact_for_version("2.0.0"))
+    prev = RiskModel.from_artifact(artifact_for_version("3.0.0"))
     new = load_default()
     models = load_engine_models()
     rows = load_calibration_rows()
@@ -69,6 +78,7 @@ def main() -> None:
     old_ms = timed(
         lambda f: old.predict(f).probability >= old.threshold(old.predict(f).mode), old_inputs
     )
+    prev_ms = timed(lambda f: prev.predict(f).probability >= prev.threshold(), new_inputs)
     new_ms = timed(lambda f: new.predict(f).probability >= new.threshold(), new_inputs)
 
     def batch_rate(call: object, items: list[object]) -> float:
@@ -79,6 +89,7 @@ def main() -> None:
         return len(items) / (time.perf_counter() - t0)
 
     old_rate = batch_rate(lambda xs: [old.predict(f) for f in xs], old_inputs)
+    prev_rate = batch_rate(prev.predict_many, new_inputs)
     new_rate = batch_rate(new.predict_many, new_inputs)
 
     for n in notes[:10]:
@@ -90,13 +101,18 @@ def main() -> None:
         field_in_engine_ms.append(result.timings_ms["field_model"])
 
     rows_out = [
-        ("before: 2.0.0 `FieldModel.predict` + decision (MAIS 3+)", *_stats(old_ms)),
+        ("2.0.0 `FieldModel.predict` + decision (MAIS 3+)", *_stats(old_ms)),
         (
-            "after: 3.0.0 `RiskModel.predict` + decision (ISS 15+ and 8 regions)",
+            "before: 3.0.0 `RiskModel.predict` + decision (ISS 15+ and 8 regions, regressions)",
+            *_stats(prev_ms),
+        ),
+        (
+            f"after: {new.version} `RiskModel.predict` + decision ({_kinds(new)})",
             *_stats(new_ms),
         ),
         (
-            "3.0.0 inside `triage` (its `timings_ms.field_model`, with the vehicle answer)",
+            f"{new.version} inside `triage` (its `timings_ms.field_model`, with the vehicle "
+            "answer)",
             *_stats(field_in_engine_ms),
         ),
         ("whole engine per one-occupant notification (`engine_total`)", *_stats(engine_ms)),
@@ -118,8 +134,8 @@ def main() -> None:
         *(f"| {name} | {med:.3f} | {p99:.3f} |" for name, med, p99 in rows_out),
         "",
         f"Batch throughput, {args.n} occupants at once: 2.0.0 {old_rate:,.0f} occupants/s "
-        f"(one `predict` each), 3.0.0 {new_rate:,.0f} occupants/s (`predict_many`, "
-        "vectorised).",
+        f"(one `predict` each), 3.0.0 {prev_rate:,.0f} occupants/s and {new.version} "
+        f"{new_rate:,.0f} occupants/s (`predict_many`, vectorised).",
         "",
         f"Target (issue 21): the field model adds under 1 ms per occupant. It is "
         f"{100.0 * share:.1f} % of the engine's median time here; the rest is the occupant "

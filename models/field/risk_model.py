@@ -2,9 +2,11 @@
 
 Fitted offline on NASS-CDS 1997-2014 (:mod:`models.offline.field.risk_fit`,
 ``aacn-triage fit-field``; model card ``docs/field/MODEL_CARD.md``), served
-with numpy only. One artifact holds several outcome models of one form::
+with numpy only. One artifact holds several outcome models, each of one of two
+kinds (``kind``, chosen per outcome by cross-validation)::
 
-    eta = x' beta                  (ranking fit, x: design columns the outcome kept)
+    eta = x' beta                  (logistic: ranking fit, x: design columns kept)
+    eta = mean_j s_j(x)            (boosted: a bag of boosted trees, models.field.boosted)
     logit P = a + b eta            (recalibration with the national weights)
 
 for ``iss15`` (the decision) and ``region_<region>`` (AIS 3+ in each body
@@ -16,7 +18,8 @@ recalibrated on held-out vehicles, and never below its riskiest occupant's
 P(ISS 15+) (anyone is at least as likely as any one; the held-out figures of the
 model card are of the recalibrated value before this floor). The 95 % intervals
 are the spread of the calibrated logit over bootstrap refits by crash stored in
-the artifact, ``expit(eta -/+ z sd)`` around the point estimate.
+the artifact (a bag's members for the boosted kind), ``expit(eta -/+ z sd)``
+around the point estimate.
 
 The artifact carries the checksum of its content and of the code that builds
 its features (:mod:`models.field.risk_features`); a tampered or stale artifact
@@ -38,6 +41,7 @@ import numpy as np
 from models.arrays import FloatArray
 from models.codehash import source_tree_sha256
 from models.constants import Z_95
+from models.field.boosted import Forest, TreeBag
 from models.field.model import (  # one artifact check for both kinds
     ArtifactError,
     canonical_content_sha256,
@@ -54,6 +58,8 @@ from models.field.risk_features import (
 __all__ = [
     "ARTIFACT_SCHEMA",
     "OUTCOME",
+    "AnyOutcomeModel",
+    "BoostedOutcomeModel",
     "REGION_NAMES",
     "OutcomeModel",
     "RegionRisk",
@@ -155,6 +161,11 @@ class OutcomeModel:
     bootstrap_beta: FloatArray
     bootstrap_calibration: FloatArray
 
+    @property
+    def n_bootstrap(self) -> int:
+        """``B``: bootstrap refits behind the interval."""
+        return int(self.bootstrap_beta.shape[0])
+
     def logits(self, x_all: FloatArray) -> tuple[FloatArray, FloatArray]:
         """Calibrated logit (n,) and its bootstrap refits (n, B) of full design rows (n, K)."""
         x = x_all[:, list(self.columns)]
@@ -163,6 +174,55 @@ class OutcomeModel:
             x @ self.bootstrap_beta.T
         )
         return eta, boot
+
+
+@dataclass(frozen=True, eq=False)
+class BoostedOutcomeModel:
+    """One outcome's bag of boosted trees (:mod:`models.field.boosted`).
+
+    ``logit P = a + b mean_j s_j(x)`` over the members' raw scores ``s_j``; the
+    members, each fitted on a resample of whole crashes, are the bootstrap
+    behind the interval (``a + b s_j(x)``).
+
+    Attributes
+    ----------
+    name, label : str
+    ais_level : int or None
+    bag : TreeBag
+    calibration : ndarray, shape (2,)
+        ``(a, b)``.
+    """
+
+    name: str
+    label: str
+    ais_level: int | None
+    bag: TreeBag
+    calibration: FloatArray
+
+    @property
+    def columns(self) -> tuple[int, ...]:
+        """Design columns the trees split on."""
+        return self.bag.columns
+
+    @property
+    def n_bootstrap(self) -> int:
+        """``B``: the members."""
+        return self.bag.n_members
+
+    def logits(self, x_all: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Calibrated logit (n,) and each member's (n, B) of full design rows (n, K)."""
+        return self.logits_of_scores(self.bag.member_scores(x_all))
+
+    def logits_of_scores(self, scores: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """:meth:`logits` from the members' raw scores (n, B) (a forest's, evaluated once)."""
+        a, b = float(self.calibration[0]), float(self.calibration[1])
+        eta: FloatArray = a + b * scores.mean(axis=1)
+        boot: FloatArray = a + b * scores
+        return eta, boot
+
+
+#: Either kind of outcome model.
+AnyOutcomeModel = OutcomeModel | BoostedOutcomeModel
 
 
 def _interval(eta: float, boot: FloatArray) -> tuple[float, float, float, float]:
@@ -255,9 +315,9 @@ class RiskModel:
     Attributes
     ----------
     name, version, sha256, outcome : str
-    decision : OutcomeModel
+    decision : OutcomeModel or BoostedOutcomeModel
         ISS 15+.
-    regions : Mapping[str, OutcomeModel]
+    regions : Mapping[str, OutcomeModel or BoostedOutcomeModel]
     vehicle_calibration : ndarray, shape (2,)
     vehicle_bootstrap_calibration : ndarray, shape (B, 2)
     imputation : RiskImputation
@@ -273,8 +333,8 @@ class RiskModel:
     version: str
     sha256: str
     outcome: str
-    decision: OutcomeModel
-    regions: Mapping[str, OutcomeModel]
+    decision: AnyOutcomeModel
+    regions: Mapping[str, AnyOutcomeModel]
     vehicle_calibration: FloatArray
     vehicle_bootstrap_calibration: FloatArray
     imputation: RiskImputation
@@ -311,7 +371,25 @@ class RiskModel:
             raise ValueError(f"field risk document: {exc}") from None
 
     @staticmethod
-    def _outcome(name: str, od: Any) -> OutcomeModel:
+    def _outcome(name: str, od: Any) -> AnyOutcomeModel:
+        kind = od.get("kind", "logistic") if isinstance(od, dict) else None
+        if kind == "boosted":
+            level = od.get("ais_level")
+            try:
+                bag = TreeBag.from_document(_get(od, "trees"), ALL_COLUMNS, f"{name}.trees")
+            except ValueError as exc:
+                raise ArtifactError(str(exc)) from None
+            if bag.n_members < 2:
+                raise ArtifactError(f"outcome {name!r}: at least 2 members")
+            return BoostedOutcomeModel(
+                name=name,
+                label=str(_get(od, "label")),
+                ais_level=None if level is None else int(level),
+                bag=bag,
+                calibration=_matrix(_get(od, "calibration"), (2,), f"{name}.calibration"),
+            )
+        if kind != "logistic":
+            raise ArtifactError(f"outcome {name!r}: `kind` must be logistic or boosted")
         names = list(_get(od, "columns"))
         if not names or names[0] != "intercept" or not set(names) <= set(ALL_COLUMNS):
             raise ArtifactError(f"outcome {name!r}: `columns` must be known, intercept first")
@@ -346,7 +424,7 @@ class RiskModel:
         vcal = _matrix(_get(veh, "calibration"), (2,), "vehicle.calibration")
         vboot = _matrix(
             _get(veh, "bootstrap_calibration"),
-            (decision.bootstrap_beta.shape[0], 2),
+            (decision.n_bootstrap, 2),
             "vehicle.bcal",
         )
         imp = _get(doc, "imputation")
@@ -407,7 +485,7 @@ class RiskModel:
         used = self.used_inputs
         names = ("iss15", *self.regions)
         models = (self.decision, *self.regions.values())
-        logits = [m.logits(x) for m in models]
+        logits = self._logits(models, x)
         eta = np.stack([e for e, _ in logits])  # (1 + regions, n)
         sd = np.stack([np.std(b, axis=1, ddof=1) for _, b in logits])
         p = _expit(eta)
@@ -437,6 +515,32 @@ class RiskModel:
                 )
             )
         return out
+
+    @cached_property
+    def _forest(self) -> Forest | None:
+        """Every boosted outcome's trees in one forest (None when none is boosted)."""
+        bags = tuple(m.bag for m in self._boosted)
+        return Forest.of(bags) if bags else None
+
+    @cached_property
+    def _boosted(self) -> tuple[BoostedOutcomeModel, ...]:
+        models = (self.decision, *self.regions.values())
+        return tuple(m for m in models if isinstance(m, BoostedOutcomeModel))
+
+    def _logits(
+        self, models: Sequence[AnyOutcomeModel], x: FloatArray
+    ) -> list[tuple[FloatArray, FloatArray]]:
+        """Each model's calibrated logit and bootstrap logits; the trees walked once."""
+        scores: dict[str, FloatArray] = {}
+        if self._forest is not None:
+            parts = self._forest.split(self._forest.member_scores(x))
+            scores = {m.name: p for m, p in zip(self._boosted, parts, strict=True)}
+        return [
+            m.logits_of_scores(scores[m.name])
+            if isinstance(m, BoostedOutcomeModel)
+            else m.logits(x)
+            for m in models
+        ]
 
     def predict(self, inputs: RiskInputs) -> RiskPrediction:
         """One occupant's answer (:meth:`predict_many` of one)."""

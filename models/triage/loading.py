@@ -11,6 +11,7 @@ from pathlib import Path
 from models import ENGINE_VERSION
 from models.baseline.logistic import BaselineModel, load_default
 from models.constants import DEFAULT_POSTURE_SD_DEG, DEFAULT_SEAT_TRACK_SD_MM
+from models.field.boosted import warm_up as _warm_up_forest
 from models.field.risk_model import load_default as load_field_model
 from models.field.versions import AnyFieldModel, load_field_artifact
 from models.injury.batch_compiled import warm_up as _warm_up_p_iss
@@ -51,7 +52,9 @@ __all__ = [
 #: in this fixed order (tests/models/test_triage.py checks that none is left out).
 #: Since the package was split from one ``triage.py`` (issue 37) the checksum differs
 #: from the one cases stored before the split record: those keep theirs (a record of
-#: the code that answered them), the code's behaviour is unchanged.
+#: the code that answered them), the code's behaviour is unchanged. The field risk
+#: model's evaluators (``field/risk_model.py``, ``field/boosted.py``) count too since
+#: field model 3.1.0: its artifact names the model, this the code that evaluates it.
 TRIAGE_SOURCES = (
     "triage/result.py",
     "triage/loading.py",
@@ -65,6 +68,8 @@ TRIAGE_SOURCES = (
     "notification.py",
     "sensor_evidence.py",
     "lpm/domain.py",
+    "field/risk_model.py",
+    "field/boosted.py",
 )
 
 
@@ -174,11 +179,12 @@ def load_surrogates(directory: Path | None = None) -> SurrogateLibrary | None:
 def warm_up() -> None:
     """Compile (or load from the numba cache) every compiled loop of the request path:
     the pulse fit, the LPM kernels and measures, the surrogates' loops and their
-    P(ISS >= 15)."""
+    P(ISS >= 15), and the field risk model's forest of boosted trees."""
     _warm_up_pulse()
     _warm_up_lpm()
     _warm_up_surrogates()
     _warm_up_p_iss()
+    _warm_up_forest()
 
 
 def load_engine_models(

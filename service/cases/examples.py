@@ -22,21 +22,21 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
     "received_at": "2026-11-23T08:15:31Z",
     "triage": {
         "iss15_plus": True,
-        "probability": 0.06148,
-        "probability_ci95": [0.05188, 0.07272],
-        "threshold": 0.01498,
+        "probability": 0.08137,
+        "probability_ci95": [0.05203, 0.1251],
+        "threshold": 0.01749,
         "recommendation": "Transport to a Level I trauma center: vehicle telemetry "
         "consistent with severe injury (ISS 15 or more likely).",
         "outcome": "ISS15+",
-        "model": "field_iss15@3.0.0",
+        "model": "field_iss15@3.1.0",
         "operating_point": "sens85",
     },
     "vehicle": {
-        "probability": 0.06148,
-        "probability_ci95": [0.047, 0.0738],
-        "heldout_auc": 0.8846,
+        "probability": 0.08137,
+        "probability_ci95": [0.05229, 0.1206],
+        "heldout_auc": 0.8883,
         "outcome": "anyone ISS15+",
-        "model": "field_iss15@3.0.0",
+        "model": "field_iss15@3.1.0",
     },
     "occupants": [
         {
@@ -82,13 +82,13 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
             },
             "region_risk": {
                 "head": {
-                    "probability": 0.02,
-                    "probability_ci95": [0.01605, 0.02489],
+                    "probability": 0.01884,
+                    "probability_ci95": [0.01529, 0.02319],
                     "ais_level": 3,
                 },
                 "face": {
-                    "probability": 0.01537,
-                    "probability_ci95": [0.01119, 0.02107],
+                    "probability": 0.01143,
+                    "probability_ci95": [0.006205, 0.02096],
                     "ais_level": 2,
                 },
                 "neck": {
@@ -97,41 +97,41 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
                     "ais_level": 2,
                 },
                 "thorax": {
-                    "probability": 0.06684,
-                    "probability_ci95": [0.0539, 0.08261],
+                    "probability": 0.07507,
+                    "probability_ci95": [0.05191, 0.1074],
                     "ais_level": 3,
                 },
                 "abdomen": {
-                    "probability": 0.01273,
-                    "probability_ci95": [0.008687, 0.01862],
+                    "probability": 0.01673,
+                    "probability_ci95": [0.00846, 0.03281],
                     "ais_level": 3,
                 },
                 "spine": {
-                    "probability": 0.01213,
-                    "probability_ci95": [0.008556, 0.01717],
+                    "probability": 0.007311,
+                    "probability_ci95": [0.005228, 0.01021],
                     "ais_level": 3,
                 },
                 "upper_extremity": {
-                    "probability": 0.01588,
-                    "probability_ci95": [0.01169, 0.02154],
+                    "probability": 0.01699,
+                    "probability_ci95": [0.01258, 0.02293],
                     "ais_level": 3,
                 },
                 "lower_extremity": {
-                    "probability": 0.06392,
-                    "probability_ci95": [0.05226, 0.07797],
+                    "probability": 0.02686,
+                    "probability_ci95": [0.013, 0.05469],
                     "ais_level": 3,
                 },
             },
             "triage": {
                 "iss15_plus": True,
-                "probability": 0.06148,
-                "probability_ci95": [0.05188, 0.07272],
-                "threshold": 0.01498,
+                "probability": 0.08137,
+                "probability_ci95": [0.05203, 0.1251],
+                "threshold": 0.01749,
                 "recommendation": "Transport to a Level I trauma center: vehicle "
                 "telemetry consistent with severe injury (ISS 15 "
                 "or more likely).",
                 "outcome": "ISS15+",
-                "model": "field_iss15@3.0.0",
+                "model": "field_iss15@3.1.0",
                 "operating_point": "sens85",
             },
             "occupant_model": {
@@ -196,8 +196,8 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
             "sha256": "b670eb94214f8538cb2bf5a286f617204aec2c091e667622dc418cd6b1ac7710",
         },
         "field_model": {
-            "version": "3.0.0",
-            "sha256": "33d447522b6108e75695294900e6bbca664c5160b15633e661b35c3537b60b7b",
+            "version": "3.1.0",
+            "sha256": "50de74b0b0d90d0e0645e27af09b74ff3237f36fdc81df21814be2d47afbe61b",
         },
         "lpm_parameters:compact_sedan": {
             "version": "compact_sedan",
@@ -209,7 +209,7 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         },
         "triage_code": {
             "version": "0.2.0",
-            "sha256": "a272b72666cf9c354a37a8869e78a936404a4aece09c724aad0d34e54650dffc",
+            "sha256": "f5f612b467a1e0169b3cdb9080180151d98e190d4907fbe8d3869bcce60c3709",
         },
         "risk_calibration": {
             "version": "1",
@@ -225,10 +225,10 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         },
     },
     "timings_ms": {
-        "pulse": 0.08406,
-        "occupants": 45.09,
-        "field_model": 0.7938,
-        "engine_total": 45.17,
+        "pulse": 0.179,
+        "occupants": 21.25,
+        "field_model": 1.327,
+        "engine_total": 21.43,
     },
     "stored": True,
     "spooled": False,

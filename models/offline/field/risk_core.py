@@ -22,6 +22,7 @@ from sklearn.linear_model import LogisticRegression
 from models.arrays import FloatArray, IntArray
 
 __all__ = [
+    "CalibratedScore",
     "Fitted",
     "crash_folds",
     "expit",
@@ -118,8 +119,33 @@ def weighted_recalibration(eta: FloatArray, y: FloatArray, w: FloatArray) -> tup
     return float(beta[0]), float(beta[1])
 
 
+class CalibratedScore:
+    """``logit P = a + b eta``: the calibrated logit and probability of a ranking score.
+
+    Shared by the regression (:class:`Fitted`) and the bag of boosted trees
+    (:class:`models.offline.field.risk_boosted.BoostedFitted`), which give
+    ``eta`` and ``calibration``.
+    """
+
+    calibration: tuple[float, float]
+
+    def eta(self, x_all: FloatArray) -> FloatArray:
+        """Ranking score of full design rows, shape (n,)."""
+        raise NotImplementedError
+
+    def logit(self, x_all: FloatArray) -> FloatArray:
+        """Calibrated logit, shape (n,)."""
+        a, b = self.calibration
+        out: FloatArray = a + b * self.eta(x_all)
+        return out
+
+    def probability(self, x_all: FloatArray) -> FloatArray:
+        """Calibrated probability, shape (n,)."""
+        return expit(self.logit(x_all))
+
+
 @dataclass(frozen=True)
-class Fitted:
+class Fitted(CalibratedScore):
     """A ranking fit and its weighted recalibration.
 
     Attributes
@@ -139,16 +165,6 @@ class Fitted:
         """Ranking linear predictor of full design rows, shape (n,)."""
         out: FloatArray = x_all[:, list(self.columns)] @ self.beta
         return out
-
-    def logit(self, x_all: FloatArray) -> FloatArray:
-        """Calibrated logit, shape (n,)."""
-        a, b = self.calibration
-        out: FloatArray = a + b * self.eta(x_all)
-        return out
-
-    def probability(self, x_all: FloatArray) -> FloatArray:
-        """Calibrated probability, shape (n,)."""
-        return expit(self.logit(x_all))
 
 
 def fit_model(
@@ -170,11 +186,14 @@ def fit_model(
         First must be the intercept.
     c : float or None
     calibrate_on : ndarray of bool, shape (n,), optional
-        Rows the recalibration is fitted on (default all).
+        Rows the recalibration is fitted on (default all; all when those rows
+        hold one outcome only, as a rare outcome's latest years may).
     """
     cols = tuple(columns)
     beta = penalised_logistic(x_all[:, list(cols)], y, c)
     eta = x_all[:, list(cols)] @ beta
     sel = np.ones(y.size, dtype=bool) if calibrate_on is None else calibrate_on
+    if not (y[sel].min() < y[sel].max()):  # no positive (or negative) there: all rows
+        sel = np.ones(y.size, dtype=bool)
     cal = weighted_recalibration(eta[sel], y[sel], w[sel])
     return Fitted(columns=cols, beta=beta, calibration=cal)

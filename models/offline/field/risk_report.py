@@ -274,34 +274,53 @@ def _selection(doc: dict[str, Any]) -> list[str]:
             f"| {len(regions)} of 8 |"
         )
     lines.append("| delta_v | (always) | yes | 8 of 8 |")
+    lines += [
+        "",
+        "Then the kind: the regression on the kept groups against a bag of "
+        f"{cfg_members(doc)} boosted-tree models on the same inputs (trees of depth 3, the number "
+        "of trees per member chosen by one member's cross-validated log loss), by the same "
+        "held-out log loss of the calibrated probability:",
+        "",
+        "| outcome | regression log loss | boosted log loss | trees per member | served kind |",
+        "|---|---|---|---|---|",
+    ]
+    for o in doc["outcomes"].values():
+        s = o["selection"]
+        k = s["kind_loss"]
+        trees = min(s["tree_loss"], key=lambda n: s["tree_loss"][n])
+        lines.append(
+            f"| {o['label']} | {_f(k['logistic'], 5)} | {_f(k['boosted'], 5)} | {trees} "
+            f"| **{o['kind']}** |"
+        )
     return lines
+
+
+def cfg_members(doc: dict[str, Any]) -> int:
+    """Members of a boosted bag in the fit's settings."""
+    return int(doc["config"]["boost_members"])
 
 
 def _comparisons(doc: dict[str, Any]) -> list[str]:
     iss = doc["outcomes"]["iss15"]
     c = doc["comparisons"]
-    lines = [_SCORE_HEAD, _score_row("field risk model 3.0.0", iss["heldout"])]
+    version = doc["model"]["version"]
+    lines = [_SCORE_HEAD, _score_row(f"field risk model {version} ({iss['kind']})", iss["heldout"])]
     lines.append(_score_row("plain logistic regression (every field, linear)", iss["plain"]))
     lines.append(_score_row("delta-V alone (logistic)", iss["delta_v_alone"]))
     lines.append(_score_row("2.0.0 (P(MAIS 3+), its own inputs)", c["legacy_2_0_0"]))
     lines.append(_score_row("NHTSA MAIS 3+ curve (mph, published)", c["nhtsa_mais3_curve"]))
     b = c["boosted"]
     lines.append(
-        f"| boosted trees (HistGradientBoosting, every column; ranking only) | {b['n']:,} | "
-        f"{b['positives']:,} | {_f(b['auc'])} | {_f(b['auc_weighted'])} | | |"
+        f"| one boosted model (HistGradientBoosting, 15 leaves, every column; ranking only) "
+        f"| {b['n']:,} | {b['positives']:,} | {_f(b['auc'])} | {_f(b['auc_weighted'])} | | |"
     )
     d = iss["auc_minus_plain_ci95"]
     lines += [
         "",
         "AUC of the model minus the plain regression's: "
         f"{_f(iss['heldout']['auc'] - iss['plain']['auc'], 4)} "
-        f"(95 % CI {_ci(d, 4)}); boosted minus the model: "
-        f"{_f(b['auc'] - iss['heldout']['auc'], 4)} ({_ci(b['auc_minus_model_ci95'], 4)}): "
-        + (
-            "the boosted model does not win clearly, so the served model stays the logistic one."
-            if b["auc_minus_model_ci95"][0] <= 0.0
-            else "the boosted model ranks better (not served: it is not evaluated in numpy here)."
-        ),
+        f"(95 % CI {_ci(d, 4)}); the one boosted model minus the served model: "
+        f"{_f(b['auc'] - iss['heldout']['auc'], 4)} ({_ci(b['auc_minus_model_ci95'], 4)}).",
         "",
         "2.0.0 and the NHTSA curve are probabilities of MAIS 3+, not ISS 15+: their P/O against "
         "ISS 15+ shows the cost of the stand-in. On its own outcome (MAIS 3+, 2010-2014, weighted) "
@@ -339,20 +358,47 @@ def _operating_points(doc: dict[str, Any]) -> list[str]:
             f"{_pct(h['flagged_weighted'])} {_pct_ci(h['flagged_weighted_ci95'])} | "
             f"{_f(h['ppv'])} | {_f(t['sensitivity'])}, {_pct(t['flagged_weighted'])} |"
         )
+    lines += [
+        "",
+        "Each threshold is set for the required sensitivity plus one binomial standard error "
+        "over the positives the held-out check counts (every ISS 15+ occupant of the fit, each "
+        "held out once). Until 2026-12-06 the margin was one fold's positives (2.2 times as "
+        "wide); at that margin, with the threshold set on the held-out predictions themselves:",
+        "",
+        "| operating point | target sensitivity | sensitivity | flagged weighted |",
+        "|---|---|---|---|",
+    ]
+    for name, op in doc["operating_points"].items():
+        fm = op["figures"]["fold_margin"]
+        h = fm["heldout_predictions"]
+        lines.append(
+            f"| `{name}` | {_f(fm['target_sensitivity'])} | {_f(h['sensitivity'])} | "
+            f"{_pct(h['flagged_weighted'])} |"
+        )
     return lines
 
 
 def _temporal(doc: dict[str, Any]) -> list[str]:
     drift = doc["drift"]
     lines = [
-        "Fleet drift treatments, chosen on an inner temporal split (fit to 2006, test 2007-2010, "
-        f"weighted log loss): chosen **{drift['chosen']}**.",
+        "Fleet drift treatments, each scored as the service answers (the accident year, where a "
+        "treatment keeps it, at the latest fitted year: a notification gives no survey year) on "
+        "two splits of the years up to 2010: an inner temporal split (fit to 2006, test "
+        "2007-2010) and the folds by crash; chosen by the mean of the two weighted log losses: "
+        f"**{drift['chosen']}**. (Until 2026-12-06 only the inner temporal split chose: it "
+        "picked the accident-year term, whose served answers were 1.43 times the observed rate "
+        "over 1997-2014.)",
         "",
-        "| treatment | inner weighted log loss | inner weighted P/O |",
-        "|---|---|---|",
+        "| treatment | inner temporal: weighted log loss | P/O | folds by crash, as served: "
+        "weighted log loss | P/O | criterion |",
+        "|---|---|---|---|---|---|",
     ]
     for n, v in drift["inner_temporal"].items():
-        lines.append(f"| {n} | {_f(v['weighted_log_loss'], 5)} | {_f(v['weighted_p_over_o'], 3)} |")
+        lines.append(
+            f"| {n} | {_f(v['weighted_log_loss'], 5)} | {_f(v['weighted_p_over_o'], 3)} | "
+            f"{_f(v['served_folds_weighted_log_loss'], 5)} | "
+            f"{_f(v['served_folds_weighted_p_over_o'], 3)} | {_f(v['criterion'], 5)} |"
+        )
     lines += [
         "",
         "Outer temporal check: fitted on 1997-2010, served as on 2011-2014 (accident year at its "
@@ -375,15 +421,16 @@ def _temporal(doc: dict[str, Any]) -> list[str]:
 
 def _regions(doc: dict[str, Any]) -> list[str]:
     lines = [
-        "| region (outcome) | positives | AUC [95 % CI] | AUC weighted | P/O weighted [95 % CI] | "
-        "plain AUC | delta-V alone AUC | groups kept |",
-        "|---|---|---|---|---|---|---|---|",
+        "| region (outcome) | kind | positives | AUC [95 % CI] | AUC weighted | "
+        "P/O weighted [95 % CI] | plain AUC | delta-V alone AUC | groups kept |",
+        "|---|---|---|---|---|---|---|---|---|",
     ]
     for r in REGION_NAMES:
         o = doc["outcomes"][f"region_{r}"]
         h = o["heldout"]
         lines.append(
-            f"| {o['label']} | {h['positives']:,} | {_f(h['auc'])} {_ci(h['auc_ci95'])} | "
+            f"| {o['label']} | {o['kind']} | {h['positives']:,} | {_f(h['auc'])} "
+            f"{_ci(h['auc_ci95'])} | "
             f"{_f(h['auc_weighted'])} | {_f(h['p_over_o_weighted'], 2)} "
             f"{_ci(h['p_over_o_weighted_ci95'], 2)} | {_f(o['plain']['auc'])} | "
             f"{_f(o['delta_v_alone']['auc'])} | {', '.join(o['groups'])} |"
@@ -406,15 +453,21 @@ def _card(doc: dict[str, Any]) -> str:
         "P(ISS 15+) of an occupant (ISS >= 16: ISS 15 cannot occur), the trauma-center criterion, "
         "from what a notification carries; beside it, P(AIS 3+ injury) in each body region (AIS 2+ "
         "where AIS 3+ is too rare to fit: named in the outcome label) and P(anyone in the vehicle "
-        "ISS 15+). Each is an L2-penalised logistic regression (splines of delta-V and age, "
-        "delta-V "
-        "slopes by crash mode and belt) fitted unweighted for ranking, then recalibrated with the "
-        "national weights `ratwgt`: the probability means *of such occupants in US towaway "
-        "crashes*. "
-        "The vehicle answer recalibrates the noisy-OR of its occupants' P(ISS 15+) on held-out "
-        "vehicles. Intervals: bootstrap refits by crash "
-        f"({cfg['n_bootstrap']} refits; the figures' intervals: {cfg['n_metric_bootstrap']} "
-        "resamples of whole crashes). Served in numpy (`models/field/risk_model.py`).",
+        "ISS 15+). Each is, as cross-validation by crash chose per outcome, either an "
+        "L2-penalised logistic regression (splines of delta-V and age, delta-V slopes by crash "
+        f"mode and belt) or a bag of {cfg['boost_members']} boosted-tree models (depth 3) each "
+        "fitted on a resample of whole crashes, fitted unweighted for ranking, then recalibrated "
+        "with the national weights `ratwgt` (a bag on its out-of-bag scores): the probability "
+        "means *of such occupants in US towaway crashes*. ISS 15+ is "
+        f"**{iss['kind']}**; the regions: "
+        + ", ".join(
+            f"{r.replace('_', ' ')} {doc['outcomes'][f'region_{r}']['kind']}" for r in REGION_NAMES
+        )
+        + ". The vehicle answer recalibrates the noisy-OR of its occupants' P(ISS 15+) on "
+        "held-out vehicles. Intervals: bootstrap refits by crash "
+        f"({cfg['n_bootstrap']} refits of a regression, a bag's {cfg['boost_members']} members; "
+        f"the figures' intervals: {cfg['n_metric_bootstrap']} resamples of whole crashes). "
+        "Served in numpy (`models/field/risk_model.py`, trees in `models/field/boosted.py`).",
         "",
         *_population(doc),
         "",

@@ -61,7 +61,7 @@ def _driver(dv: float, **kw: object) -> RiskInputs:
 def test_the_shipped_artifact_loads_with_every_outcome(model: RiskModel) -> None:
     assert model.outcome == OUTCOME == "ISS15+"
     assert model.name == "field_iss15"
-    assert model.version == "3.0.0"
+    assert model.version == "3.1.0"
     assert set(model.regions) == set(REGION_NAMES)
     assert model.default_operating_point == "sens85"
     assert set(model.thresholds) == {"sens85", "acs_cot"}
@@ -69,12 +69,13 @@ def test_the_shipped_artifact_loads_with_every_outcome(model: RiskModel) -> None
     assert model.threshold("acs_cot") < model.threshold("sens85")
     for r in model.regions.values():
         assert r.ais_level in (2, 3)
-        assert r.bootstrap_beta.shape[0] == model.decision.bootstrap_beta.shape[0]
+        assert r.n_bootstrap >= 2
+    assert model.vehicle_bootstrap_calibration.shape == (model.decision.n_bootstrap, 2)
 
 
 def test_a_tampered_or_stale_artifact_is_refused(tmp_path: Path) -> None:
     doc = json.loads(default_artifact_path().read_text(encoding="utf-8"))
-    doc["outcomes"]["iss15"]["coefficients"][1] += 0.1
+    doc["outcomes"]["iss15"]["calibration"][1] += 0.1
     bad = tmp_path / "tampered.json"
     bad.write_text(json.dumps(doc), encoding="utf-8")
     with pytest.raises(ValueError, match="checksum"):
@@ -236,31 +237,42 @@ def _as_inputs(rows: pd.DataFrame) -> list[RiskInputs]:
 
 
 def test_the_served_probability_is_the_fits_prediction(model: RiskModel, data) -> None:  # type: ignore[no-untyped-def]
-    """Refitting the ISS 15+ and head models as the artifact records them reproduces its
-    coefficients; on 300 occupants, the service's path (RiskInputs -> numpy) gives the
-    offline fit's (scikit-learn) probability at the served accident year."""
+    """On 300 occupants, the service's path (RiskInputs -> numpy) gives the probability of
+    every outcome model evaluated on the fit's own design rows at the served accident year;
+    each regression refitted as the artifact records it reproduces its coefficients and
+    its scikit-learn prediction. (A boosted bag's evaluation against scikit-learn and its
+    refit's reproducibility are tests of their own: ``test_boosted.py``.)"""
     doc = model.document
-    cfg = RiskConfig(**doc["config"])
+    cfg = RiskConfig(
+        **{k: tuple(v) if isinstance(v, list) else v for k, v in doc["config"].items()}
+    )
     if cfg.subsample < 1.0:
         pytest.skip("a reduced artifact: the data differ")
     rng = np.random.default_rng(3)
     pick = rng.choice(len(data.rows), 300, replace=False)
     served = model.predict_many(_as_inputs(data.rows.iloc[pick]))
-    for name in ("iss15", "region_head"):
-        od = doc["outcomes"][name]
-        o = next(o for o in data.outcomes if o.name == name)
-        spec = Spec(tuple(od["groups"]), od["penalty_c"], doc["drift"]["chosen"])
-        f = fit_spec(data, o.y, np.arange(o.y.size), spec, cfg)
-        assert np.allclose(f.beta, od["coefficients"], rtol=1e-6, atol=1e-9)
-        x = data.x[pick].copy()
-        x[:, ALL_COLUMNS.index("accident_year")] = model.imputation.accident_year
-        expected = f.probability(x)
+    x = data.x[pick].copy()
+    x[:, ALL_COLUMNS.index("accident_year")] = model.imputation.accident_year
+    refitted = 0
+    for name in ("iss15", *(f"region_{r}" for r in REGION_NAMES)):
+        om = model.decision if name == "iss15" else model.regions[name.removeprefix("region_")]
         got = (
             [p.probability for p in served]
             if name == "iss15"
-            else [p.regions["head"].probability for p in served]
+            else [p.regions[name.removeprefix("region_")].probability for p in served]
         )
-        assert np.allclose(got, expected, rtol=1e-7, atol=1e-10)
+        eta, _ = om.logits(x)
+        assert np.allclose(got, 1.0 / (1.0 + np.exp(-eta)), rtol=1e-9, atol=1e-12), name
+        od = doc["outcomes"][name]
+        if od["kind"] != "logistic" or refitted >= 2:
+            continue
+        o = next(o for o in data.outcomes if o.name == name)
+        spec = Spec(tuple(od["groups"]), od["penalty_c"], doc["drift"]["chosen"])
+        f = fit_spec(data, o.y, np.arange(o.y.size), spec, cfg)
+        assert np.allclose(f.beta, od["coefficients"], rtol=1e-6, atol=1e-9)  # type: ignore[union-attr]
+        assert np.allclose(got, f.probability(x), rtol=1e-7, atol=1e-10)
+        refitted += 1
+    assert refitted >= 1
 
 
 def test_data_and_notification_paths_build_the_same_design(model: RiskModel, data) -> None:  # type: ignore[no-untyped-def]

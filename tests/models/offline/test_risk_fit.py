@@ -67,12 +67,23 @@ def test_a_reduced_fit_writes_an_artifact_card_and_readme_block_that_agree(
     from models.offline.field.risk_report import acceptance, write_risk_model_card
     from models.offline.field.risk_run import fit_risk
 
-    cfg = RiskConfig(subsample=0.15, n_splits=3, n_bootstrap=3, n_metric_bootstrap=10)
+    cfg = RiskConfig(
+        subsample=0.15,
+        n_splits=3,
+        n_bootstrap=3,
+        n_metric_bootstrap=10,
+        boost_members=2,
+        boost_tree_grid=(40, 80),
+    )
     fit = fit_risk(cfg, cache_dir=tmp_path / "cache")
     doc = fit.artifact
     model = RiskModel.from_document(doc)
     assert set(model.regions) == set(REGION_NAMES)
-    assert model.decision.bootstrap_beta.shape[0] == 3
+    kinds = {o["kind"] for o in doc["outcomes"].values()}
+    assert kinds <= {"logistic", "boosted"}
+    assert model.decision.n_bootstrap == (2 if doc["outcomes"]["iss15"]["kind"] == "boosted" else 3)
+    for o in doc["outcomes"].values():  # each kind was chosen on the lower held-out log loss
+        assert o["selection"]["kind_loss"][o["kind"]] == min(o["selection"]["kind_loss"].values())
     # resumable: a second run reads every stage from the cache and gives the same document
     again = fit_risk(cfg, cache_dir=tmp_path / "cache")
     assert again.artifact == doc
