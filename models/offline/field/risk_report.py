@@ -60,7 +60,8 @@ def _pct_ci(ci: Any) -> str:
 
 
 def acceptance(doc: dict[str, Any]) -> list[tuple[str, bool, str]]:
-    """Issue 38/39 acceptance items measured on the artifact's held-out figures."""
+    """Issue 38/39 acceptance items measured on the artifact's held-out figures (to the
+    digit that decides them: AUC to 4 places, the flagged share to 0.01 %)."""
     iss = doc["outcomes"]["iss15"]
     h, t = iss["heldout"], iss["temporal"]
     op = doc["operating_points"][doc["default_operating_point"]]["figures"]["heldout"]
@@ -68,7 +69,7 @@ def acceptance(doc: dict[str, Any]) -> list[tuple[str, bool, str]]:
         (
             "ISS 15+ AUC (held out by crash) at least the plain regression's",
             h["auc"] >= iss["plain"]["auc"],
-            f"{_f(h['auc'])} vs {_f(iss['plain']['auc'])}",
+            f"{_f(h['auc'], 4)} vs {_f(iss['plain']['auc'], 4)}",
         ),
         (
             "weighted mean predicted within 10 % of the weighted observed rate",
@@ -93,7 +94,7 @@ def acceptance(doc: dict[str, Any]) -> list[tuple[str, bool, str]]:
         (
             "default operating point held out: <= 12.5 % of the weighted population flagged",
             op["flagged_weighted"] <= 0.125,
-            f"{_pct(op['flagged_weighted'])} {_pct_ci(op['flagged_weighted_ci95'])}",
+            f"{100.0 * op['flagged_weighted']:.2f} % {_pct_ci(op['flagged_weighted_ci95'])}",
         ),
     ]
     for r in REGION_NAMES:
@@ -103,7 +104,7 @@ def acceptance(doc: dict[str, Any]) -> list[tuple[str, bool, str]]:
                 f"{o['label']}: AUC at least the plain regression's; weighted P/O within 15 %",
                 o["heldout"]["auc"] >= o["plain"]["auc"]
                 and abs(o["heldout"]["p_over_o_weighted"] - 1.0) <= 0.15,
-                f"AUC {_f(o['heldout']['auc'])} vs {_f(o['plain']['auc'])}; "
+                f"AUC {_f(o['heldout']['auc'], 4)} vs {_f(o['plain']['auc'], 4)}; "
                 f"P/O {_f(o['heldout']['p_over_o_weighted'])} "
                 f"{_ci(o['heldout'].get('p_over_o_weighted_ci95'))}",
             )
