@@ -2,8 +2,9 @@
 
 Fitted offline on NASS-CDS 1997-2014 (:mod:`models.offline.field.risk_fit`,
 ``aacn-triage fit-field``; model card ``docs/field/MODEL_CARD.md``), served
-with numpy only. One artifact holds several outcome models, each of one of two
-kinds (``kind``, chosen per outcome by cross-validation)::
+with numpy (the trees walked by one compiled loop). One artifact holds several
+outcome models, each of one of two kinds (``kind``, chosen per outcome by
+cross-validation; an artifact without ``kind``, 3.0.0, holds regressions)::
 
     eta = x' beta                  (logistic: ranking fit, x: design columns kept)
     eta = mean_j s_j(x)            (boosted: a bag of boosted trees, models.field.boosted)
