@@ -13,6 +13,7 @@
 
 from __future__ import annotations
 
+from abc import ABC, abstractmethod
 from collections.abc import Sequence
 from dataclasses import dataclass
 
@@ -119,7 +120,7 @@ def weighted_recalibration(eta: FloatArray, y: FloatArray, w: FloatArray) -> tup
     return float(beta[0]), float(beta[1])
 
 
-class CalibratedScore:
+class CalibratedScore(ABC):
     """``logit P = a + b eta``: the calibrated logit and probability of a ranking score.
 
     Shared by the regression (:class:`Fitted`) and the bag of boosted trees
@@ -129,9 +130,9 @@ class CalibratedScore:
 
     calibration: tuple[float, float]
 
+    @abstractmethod
     def eta(self, x_all: FloatArray) -> FloatArray:
         """Ranking score of full design rows, shape (n,)."""
-        raise NotImplementedError
 
     def logit(self, x_all: FloatArray) -> FloatArray:
         """Calibrated logit, shape (n,)."""
