@@ -6,8 +6,10 @@ and rewrites the "Field risk model" section of ``benchmarks/RESULTS.md``.
 Inputs: N calibration rows (seeded draw) as the service builds them. Timed, one
 occupant at a time: ``FieldModel.predict`` of 2.0.0 (MAIS 3+: design row, 200
 bootstrap refits, interval), ``RiskModel.predict`` of 3.0.0 (ISS 15+ and eight
-region risks, regressions with their bootstrap refits; before) and of the
-shipped version (3.1.0: bags of boosted trees where the fit chose them; after),
+region risks, regressions with their bootstrap refits), of 3.1.0 (bags of
+boosted trees where the fit chose them, feature set 1; before) and of the
+shipped version (3.2.0: feature set 2, the trees may also split on the PDOF seen
+from the seat and the impact count; after),
 each with the decision at the default operating point; batch throughput of
 each (occupants per second, all N at once: ``RiskModel.predict_many`` is
 vectorised over occupants); and, on the same notifications, the whole
@@ -42,10 +44,15 @@ def _stats(samples_ms: list[float]) -> tuple[float, float]:
 
 
 def _kinds(model: RiskModel) -> str:
-    """Which outcomes are bags of boosted trees."""
+    """Which outcomes are bags of boosted trees, and which blends of a bag and a regression."""
     outs = model.document["outcomes"]
-    boosted = [n.removeprefix("region_") for n, o in outs.items() if o.get("kind") == "boosted"]
-    return "ISS 15+ and 8 regions; boosted: " + (", ".join(boosted) or "none")
+
+    def of(kind: str) -> str:
+        names = [n.removeprefix("region_") for n, o in outs.items() if o.get("kind") == kind]
+        return ", ".join(names) or "none"
+
+    text = f"ISS 15+ and 8 regions; boosted: {of('boosted')}"
+    return text + (f"; blends: {of('blend')}" if of("blend") != "none" else "")
 
 
 def main() -> None:
@@ -55,7 +62,8 @@ def main() -> None:
     args = parser.parse_args()
 
     old = FieldModel.from_artifact(artifact_for_version("2.0.0"))
-    prev = RiskModel.from_artifact(artifact_for_version("3.0.0"))
+    first = RiskModel.from_artifact(artifact_for_version("3.0.0"))
+    prev = RiskModel.from_artifact(artifact_for_version("3.1.0"))
     new = load_default()
     models = load_engine_models()
     rows = load_calibration_rows()
@@ -78,6 +86,7 @@ def main() -> None:
     old_ms = timed(
         lambda f: old.predict(f).probability >= old.threshold(old.predict(f).mode), old_inputs
     )
+    first_ms = timed(lambda f: first.predict(f).probability >= first.threshold(), new_inputs)
     prev_ms = timed(lambda f: prev.predict(f).probability >= prev.threshold(), new_inputs)
     new_ms = timed(lambda f: new.predict(f).probability >= new.threshold(), new_inputs)
 
@@ -89,6 +98,7 @@ def main() -> None:
         return len(items) / (time.perf_counter() - t0)
 
     old_rate = batch_rate(lambda xs: [old.predict(f) for f in xs], old_inputs)
+    first_rate = batch_rate(first.predict_many, new_inputs)
     prev_rate = batch_rate(prev.predict_many, new_inputs)
     new_rate = batch_rate(new.predict_many, new_inputs)
 
@@ -103,7 +113,11 @@ def main() -> None:
     rows_out = [
         ("2.0.0 `FieldModel.predict` + decision (MAIS 3+)", *_stats(old_ms)),
         (
-            "before: 3.0.0 `RiskModel.predict` + decision (ISS 15+ and 8 regions, regressions)",
+            "3.0.0 `RiskModel.predict` + decision (ISS 15+ and 8 regions, regressions)",
+            *_stats(first_ms),
+        ),
+        (
+            f"before: 3.1.0 `RiskModel.predict` + decision ({_kinds(prev)}; feature set 1)",
             *_stats(prev_ms),
         ),
         (
@@ -134,7 +148,7 @@ def main() -> None:
         *(f"| {name} | {med:.3f} | {p99:.3f} |" for name, med, p99 in rows_out),
         "",
         f"Batch throughput, {args.n} occupants at once: 2.0.0 {old_rate:,.0f} occupants/s "
-        f"(one `predict` each), 3.0.0 {prev_rate:,.0f} occupants/s and {new.version} "
+        f"(one `predict` each), 3.0.0 {first_rate:,.0f}, 3.1.0 {prev_rate:,.0f} and {new.version} "
         f"{new_rate:,.0f} occupants/s (`predict_many`, vectorised).",
         "",
         f"Target (issue 21): the field model adds under 1 ms per occupant. It is "

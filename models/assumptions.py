@@ -34,6 +34,7 @@ class AssumptionCode(StrEnum):
     MODEL_YEAR_IMPUTED = "model_year_imputed"
     MODEL_YEAR_BEYOND_DATA = "model_year_beyond_data"
     QUARTER_TURNS_IMPUTED = "quarter_turns_imputed"
+    IMPACT_COUNT_IMPUTED = "impact_count_imputed"
     OUTSIDE_FIELD_POPULATION = "outside_field_population"
     OUTSIDE_OCCUPANT_MODEL_COVERAGE = "outside_occupant_model_coverage"
     OCCUPANT_MODEL_FAILED = "occupant_model_failed"
@@ -110,6 +111,11 @@ DESCRIPTIONS: Final[dict[AssumptionCode, str]] = {
     AssumptionCode.QUARTER_TURNS_IMPUTED: (
         "Rollover reported without its quarter turns: the field risk models used the median "
         "of rolled vehicles in their data."
+    ),
+    AssumptionCode.IMPACT_COUNT_IMPUTED: (
+        "Multiple impacts reported without their count: the field risk models used the median "
+        "count of vehicles with two or more harmful events in their data. Send "
+        "`crash.impact_count` where the vehicle counts its events."
     ),
     AssumptionCode.OUTSIDE_FIELD_POPULATION: (
         "An occupant outside the field risk models' data (under 16 years): the probability "

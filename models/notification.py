@@ -299,6 +299,8 @@ class CrashNotification:
     model_year: int | None = None
     #: Rollover quarter turns where the vehicle sends them; None: not sent.
     rollover_quarter_turns: int | None = None
+    #: Harmful events (impacts) the vehicle counted; None: not sent.
+    impact_count: int | None = None
 
 
 def summary_notification(

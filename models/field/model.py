@@ -28,7 +28,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
@@ -148,7 +148,9 @@ def _get(obj: Any, key: str) -> Any:
     return obj[key]
 
 
-def verified_document(raw: bytes, *, schema: str, feature_sha256: str) -> dict[str, Any]:
+def verified_document(
+    raw: bytes, *, schema: str, feature_sha256: str | Callable[[dict[str, Any]], str]
+) -> dict[str, Any]:
     """A field model artifact's JSON object, its schema, content and feature code checked.
 
     Parameters
@@ -157,8 +159,10 @@ def verified_document(raw: bytes, *, schema: str, feature_sha256: str) -> dict[s
         The artifact file's bytes.
     schema : str
         The ``schema`` the artifact must declare (each kind has its own).
-    feature_sha256 : str
-        The checksum of the feature code the artifact must have been fitted for.
+    feature_sha256 : str or callable
+        The checksum of the feature code the artifact must have been fitted for,
+        or a function of the document giving it (an artifact names its feature
+        set; it is called after the content checksum holds).
 
     Raises
     ------
@@ -173,7 +177,8 @@ def verified_document(raw: bytes, *, schema: str, feature_sha256: str) -> dict[s
         raise ArtifactError(f"`schema` must be {schema!r}")
     if _get(doc, "content_sha256") != canonical_content_sha256(doc):
         raise ArtifactError("content checksum mismatch (the artifact was altered)")
-    if _get(doc, "feature_code_sha256") != feature_sha256:
+    expected = feature_sha256 if isinstance(feature_sha256, str) else feature_sha256(doc)
+    if _get(doc, "feature_code_sha256") != expected:
         raise ArtifactError("stale: fitted for other feature code; run `aacn-triage fit-field`")
     return doc
 

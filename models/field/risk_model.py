@@ -55,11 +55,18 @@ from models.field.risk_features import (
     design_columns,
     inputs_arrays,
 )
+from models.field.risk_impacts import (
+    ALL_COLUMNS_2,
+    FEATURE_SET_SOURCES,
+    design_columns_2,
+    inputs_arrays_2,
+)
 
 __all__ = [
     "ARTIFACT_SCHEMA",
     "OUTCOME",
     "AnyOutcomeModel",
+    "BlendOutcomeModel",
     "BoostedOutcomeModel",
     "REGION_NAMES",
     "OutcomeModel",
@@ -100,17 +107,37 @@ _INPUT_COLUMNS: Final[Mapping[str, tuple[str, ...]]] = {
     "mass_kg": ("mass_kg",),
     "quarter_turns": ("log1p_quarter_turns",),
     "model_year": ("model_year",),
+    "impact_count": ("impact_count",),
 }
 
 _ARTIFACT_FILE: Final[str] = "field_iss15.json"
-_FEATURE_SOURCES: Final[tuple[str, ...]] = ("field/risk_features.py",)
 
 
-@lru_cache(maxsize=1)
-def feature_code_sha256() -> str:
-    """Checksum of the normalised code that builds the features."""
+@lru_cache(maxsize=4)
+def feature_code_sha256(columns: tuple[str, ...] = ALL_COLUMNS_2) -> str:
+    """Checksum of the normalised code that builds the features of a feature set.
+
+    Parameters
+    ----------
+    columns : tuple of str, optional
+        The set's candidate columns (default: the newest set,
+        :data:`models.field.risk_impacts.ALL_COLUMNS_2`).
+
+    Raises
+    ------
+    KeyError
+        Columns of no known feature set.
+    """
     root = Path(__file__).resolve().parents[1]
-    return source_tree_sha256([root / rel for rel in _FEATURE_SOURCES])
+    return source_tree_sha256([root / rel for rel in FEATURE_SET_SOURCES[columns]])
+
+
+def _artifact_feature_sha256(doc: dict[str, Any]) -> str:
+    """The feature code checksum an artifact's own feature set must match."""
+    columns = tuple(_get(doc, "candidate_columns"))
+    if columns not in FEATURE_SET_SOURCES:
+        raise ArtifactError("`candidate_columns` are of no known feature set")
+    return feature_code_sha256(columns)
 
 
 def _get(obj: Any, key: str) -> Any:
@@ -145,7 +172,7 @@ class OutcomeModel:
         e.g. ``region_head``, ``head AIS3+``.
     ais_level : int or None
     columns : tuple of int
-        Indices into :data:`models.field.risk_features.ALL_COLUMNS`.
+        Indices into the artifact's candidate columns (its feature set's).
     beta : ndarray, shape (k,)
     calibration : ndarray, shape (2,)
         ``(a, b)``.
@@ -222,8 +249,63 @@ class BoostedOutcomeModel:
         return eta, boot
 
 
-#: Either kind of outcome model.
-AnyOutcomeModel = OutcomeModel | BoostedOutcomeModel
+@dataclass(frozen=True, eq=False)
+class BlendOutcomeModel:
+    """One outcome's blend of a regression and a bag of boosted trees.
+
+    ``logit P = (1 - w) logit_regression + w logit_bag``, each part with its own
+    calibration (:mod:`models.offline.field.risk_blend`). The regression's
+    bootstrap refits were fitted on the bag's resamples of crashes, in order:
+    refit ``j`` blended with member ``j`` is a bootstrap refit of the blend.
+
+    Attributes
+    ----------
+    name, label : str
+    ais_level : int or None
+    logistic : OutcomeModel
+    boosted : BoostedOutcomeModel
+    weight : float
+        ``w``, in (0, 1).
+    """
+
+    name: str
+    label: str
+    ais_level: int | None
+    logistic: OutcomeModel
+    boosted: BoostedOutcomeModel
+    weight: float
+
+    @property
+    def columns(self) -> tuple[int, ...]:
+        """Design columns either part uses."""
+        return tuple(sorted(set(self.logistic.columns) | set(self.boosted.columns)))
+
+    @property
+    def bag(self) -> TreeBag:
+        """The boosted part's trees (walked with the other bags')."""
+        return self.boosted.bag
+
+    @property
+    def n_bootstrap(self) -> int:
+        """``B``: the bag's members (and the regression's refits on their resamples)."""
+        return self.boosted.n_bootstrap
+
+    def logits(self, x_all: FloatArray) -> tuple[FloatArray, FloatArray]:
+        """Calibrated logit (n,) and its bootstrap refits (n, B) of full design rows (n, K)."""
+        return self.logits_of_scores(x_all, self.bag.member_scores(x_all))
+
+    def logits_of_scores(
+        self, x_all: FloatArray, scores: FloatArray
+    ) -> tuple[FloatArray, FloatArray]:
+        """:meth:`logits` with the bag's raw member scores (n, B) given."""
+        e1, b1 = self.logistic.logits(x_all)
+        e2, b2 = self.boosted.logits_of_scores(scores)
+        w = self.weight
+        return (1.0 - w) * e1 + w * e2, (1.0 - w) * b1 + w * b2
+
+
+#: Any kind of outcome model.
+AnyOutcomeModel = OutcomeModel | BoostedOutcomeModel | BlendOutcomeModel
 
 
 def _interval(eta: float, boot: FloatArray) -> tuple[float, float, float, float]:
@@ -328,6 +410,11 @@ class RiskModel:
     operating_point_descriptions : Mapping[str, str]
     default_operating_point : str
     document : Mapping[str, Any]
+    candidate_columns : tuple of str
+        The feature set's design columns (the outcome models index them).
+    impact_count_imputed : float or None
+        Feature set 2: the impact count taken for multiple impacts of unknown
+        count (None: feature set 1, no count).
     """
 
     name: str
@@ -344,6 +431,8 @@ class RiskModel:
     operating_point_descriptions: Mapping[str, str]
     default_operating_point: str
     document: Mapping[str, Any]
+    candidate_columns: tuple[str, ...] = ALL_COLUMNS
+    impact_count_imputed: float | None = None
 
     @classmethod
     def from_artifact(cls, path: str | Path) -> RiskModel:
@@ -372,12 +461,29 @@ class RiskModel:
             raise ValueError(f"field risk document: {exc}") from None
 
     @staticmethod
-    def _outcome(name: str, od: Any) -> AnyOutcomeModel:
+    def _outcome(name: str, od: Any, candidates: tuple[str, ...]) -> AnyOutcomeModel:
         kind = od.get("kind", "logistic") if isinstance(od, dict) else None
+        if kind == "blend":
+            w = od.get("weight_boosted")
+            if not isinstance(w, float) or not 0.0 < w < 1.0:
+                raise ArtifactError(f"outcome {name!r}: `weight_boosted` must be in (0, 1)")
+            common = {"label": _get(od, "label"), "ais_level": od.get("ais_level")}
+            parts = [
+                RiskModel._outcome(name, {**_get(od, part), **common}, candidates)
+                for part in ("logistic", "boosted")
+            ]
+            lr_part, bag_part = parts
+            if not isinstance(lr_part, OutcomeModel) or not isinstance(
+                bag_part, BoostedOutcomeModel
+            ):
+                raise ArtifactError(f"outcome {name!r}: a blend of a logistic and a boosted part")
+            if lr_part.n_bootstrap != bag_part.n_bootstrap:
+                raise ArtifactError(f"outcome {name!r}: one refit per member of the bag")
+            return BlendOutcomeModel(name, lr_part.label, lr_part.ais_level, lr_part, bag_part, w)
         if kind == "boosted":
             level = od.get("ais_level")
             try:
-                bag = TreeBag.from_document(_get(od, "trees"), ALL_COLUMNS, f"{name}.trees")
+                bag = TreeBag.from_document(_get(od, "trees"), candidates, f"{name}.trees")
             except ValueError as exc:
                 raise ArtifactError(str(exc)) from None
             if bag.n_members < 2:
@@ -390,9 +496,9 @@ class RiskModel:
                 calibration=_matrix(_get(od, "calibration"), (2,), f"{name}.calibration"),
             )
         if kind != "logistic":
-            raise ArtifactError(f"outcome {name!r}: `kind` must be logistic or boosted")
+            raise ArtifactError(f"outcome {name!r}: `kind` must be logistic, boosted or blend")
         names = list(_get(od, "columns"))
-        if not names or names[0] != "intercept" or not set(names) <= set(ALL_COLUMNS):
+        if not names or names[0] != "intercept" or not set(names) <= set(candidates):
             raise ArtifactError(f"outcome {name!r}: `columns` must be known, intercept first")
         k = len(names)
         beta = _matrix(_get(od, "coefficients"), (k,), f"{name}.coefficients")
@@ -406,7 +512,7 @@ class RiskModel:
             name=name,
             label=str(_get(od, "label")),
             ais_level=None if level is None else int(level),
-            columns=tuple(ALL_COLUMNS.index(c) for c in names),
+            columns=tuple(candidates.index(c) for c in names),
             beta=beta,
             calibration=cal,
             bootstrap_beta=boot,
@@ -415,12 +521,15 @@ class RiskModel:
 
     @classmethod
     def _from_bytes(cls, raw: bytes) -> RiskModel:
-        doc = verified_document(raw, schema=ARTIFACT_SCHEMA, feature_sha256=feature_code_sha256())
-        if tuple(_get(doc, "candidate_columns")) != ALL_COLUMNS:
-            raise ArtifactError("`candidate_columns` differ from the feature code's")
+        doc = verified_document(
+            raw, schema=ARTIFACT_SCHEMA, feature_sha256=_artifact_feature_sha256
+        )
+        cand = tuple(str(c) for c in doc["candidate_columns"])
         outs = _get(doc, "outcomes")
-        decision = cls._outcome("iss15", _get(outs, "iss15"))
-        regions = {r: cls._outcome(f"region_{r}", _get(outs, f"region_{r}")) for r in REGION_NAMES}
+        decision = cls._outcome("iss15", _get(outs, "iss15"), cand)
+        regions = {
+            r: cls._outcome(f"region_{r}", _get(outs, f"region_{r}"), cand) for r in REGION_NAMES
+        }
         veh = _get(doc, "vehicle")
         vcal = _matrix(_get(veh, "calibration"), (2,), "vehicle.calibration")
         vboot = _matrix(
@@ -432,6 +541,10 @@ class RiskModel:
         imputation = RiskImputation(
             **{k: float(_get(imp, k)) for k in RiskImputation.__dataclass_fields__}
         )
+        # feature set 2: the count imputed for multiple impacts of unknown count
+        count = float(_get(imp, "impact_count")) if cand == ALL_COLUMNS_2 else None
+        if count is not None and not 2.0 <= count <= 50.0:
+            raise ArtifactError("`imputation.impact_count` must be in [2, 50]")
         points = _get(doc, "operating_points")
         thresholds = {str(n): float(_get(op, "threshold")) for n, op in points.items()}
         if not all(0.0 < t < 1.0 for t in thresholds.values()):
@@ -457,19 +570,30 @@ class RiskModel:
             },
             default_operating_point=str(default),
             document=doc,
+            candidate_columns=cand,
+            impact_count_imputed=count,
         )
 
     def design(
         self, inputs: Sequence[RiskInputs]
     ) -> tuple[FloatArray, tuple[tuple[str, ...], ...]]:
-        """Full design rows (n, K) of `inputs` and the inputs imputed per occupant."""
+        """Full design rows (n, K) of `inputs` and the inputs imputed per occupant.
+
+        ``K`` is the artifact's feature set's: feature set 2
+        (:mod:`models.field.risk_impacts`) reads the impact count of
+        :class:`~models.field.risk_impacts.ImpactRiskInputs`.
+        """
+        if self.impact_count_imputed is not None:
+            arrays, imputed = inputs_arrays_2(inputs, self.imputation, self.impact_count_imputed)
+            return design_columns_2(arrays), imputed
         arrays, imputed = inputs_arrays(inputs, self.imputation)
         return design_columns(arrays), imputed
 
     @cached_property
     def used_inputs(self) -> frozenset[str]:
         """The imputable inputs some outcome model uses (others are not named when unknown)."""
-        cols = {ALL_COLUMNS[i] for m in (self.decision, *self.regions.values()) for i in m.columns}
+        cand = self.candidate_columns
+        cols = {cand[i] for m in (self.decision, *self.regions.values()) for i in m.columns}
         return frozenset(k for k, names in _INPUT_COLUMNS.items() if cols & set(names))
 
     def predict_many(self, inputs: Sequence[RiskInputs]) -> list[RiskPrediction]:
@@ -524,9 +648,10 @@ class RiskModel:
         return Forest.of(bags) if bags else None
 
     @cached_property
-    def _boosted(self) -> tuple[BoostedOutcomeModel, ...]:
+    def _boosted(self) -> tuple[BoostedOutcomeModel | BlendOutcomeModel, ...]:
+        """The outcome models with trees (boosted and blends)."""
         models = (self.decision, *self.regions.values())
-        return tuple(m for m in models if isinstance(m, BoostedOutcomeModel))
+        return tuple(m for m in models if isinstance(m, BoostedOutcomeModel | BlendOutcomeModel))
 
     def _logits(
         self, models: Sequence[AnyOutcomeModel], x: FloatArray
@@ -536,12 +661,15 @@ class RiskModel:
         if self._forest is not None:
             parts = self._forest.split(self._forest.member_scores(x))
             scores = {m.name: p for m, p in zip(self._boosted, parts, strict=True)}
-        return [
-            m.logits_of_scores(scores[m.name])
-            if isinstance(m, BoostedOutcomeModel)
-            else m.logits(x)
-            for m in models
-        ]
+        out = []
+        for m in models:
+            if isinstance(m, BoostedOutcomeModel):
+                out.append(m.logits_of_scores(scores[m.name]))
+            elif isinstance(m, BlendOutcomeModel):
+                out.append(m.logits_of_scores(x, scores[m.name]))
+            else:
+                out.append(m.logits(x))
+        return out
 
     def predict(self, inputs: RiskInputs) -> RiskPrediction:
         """One occupant's answer (:meth:`predict_many` of one)."""

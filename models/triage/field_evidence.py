@@ -9,6 +9,7 @@ from models.assumptions import Assumption, AssumptionCode
 from models.field.features import FieldInputs, field_inputs
 from models.field.model import FieldModel, FieldPrediction
 from models.field.risk_features import MODEL_YEAR_CLAMP, AirbagCode, RiskInputs, SeatSide
+from models.field.risk_impacts import ImpactRiskInputs
 from models.field.risk_model import RiskModel, RiskPrediction
 from models.impact_mode import ImpactClassification, classify_impact, occupant_side
 from models.notification import (
@@ -202,10 +203,12 @@ def risk_inputs(
 
     The direction of the delta-V is the processed pulse's PDOF; the seat's side
     is the vehicle's side it sits on (the driver's is the drive side); a
-    frontal airbag reported absent is the data's "none".
+    frontal airbag reported absent is the data's "none". The impact count is
+    the notification's (None where not sent: the model resolves it from
+    ``multiple_impacts``).
     """
     side = occupant_side(occupant.seat, notification.drive_side)
-    return RiskInputs(
+    return ImpactRiskInputs(
         delta_v_kmh=float(pulse.delta_v_kmh),
         pdof_deg=float(pulse.pdof_deg),
         seat_row=occupant.seat.row,
@@ -227,6 +230,7 @@ def risk_inputs(
         stature_cm=occupant.stature_cm,
         mass_kg=occupant.mass_kg,
         model_year=notification.model_year,
+        impact_count=notification.impact_count,
     )
 
 
@@ -276,6 +280,12 @@ def _risk_assumptions(
             AssumptionCode.QUARTER_TURNS_IMPUTED,
             f"{who}: rollover without quarter turns: the field risk models use "
             f"{imp.quarter_turns:g} (the median of rolled vehicles in their data)",
+        ),
+        "impact_count": (
+            AssumptionCode.IMPACT_COUNT_IMPUTED,
+            f"{who}: multiple impacts without their count: the field risk models use "
+            f"{model.impact_count_imputed or 0.0:g} (the median of vehicles with two or more "
+            "in their data)",
         ),
     }
     out = [Assumption(*texts[name], index) for name in prediction.imputed]

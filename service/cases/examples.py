@@ -22,21 +22,21 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
     "received_at": "2026-11-23T08:15:31Z",
     "triage": {
         "iss15_plus": True,
-        "probability": 0.08137,
-        "probability_ci95": [0.05203, 0.1251],
-        "threshold": 0.01749,
+        "probability": 0.07953,
+        "probability_ci95": [0.05356, 0.1165],
+        "threshold": 0.01771,
         "recommendation": "Transport to a Level I trauma center: vehicle telemetry "
         "consistent with severe injury (ISS 15 or more likely).",
         "outcome": "ISS15+",
-        "model": "field_iss15@3.1.0",
+        "model": "field_iss15@3.2.0",
         "operating_point": "sens85",
     },
     "vehicle": {
-        "probability": 0.08137,
-        "probability_ci95": [0.05229, 0.1206],
-        "heldout_auc": 0.8883,
+        "probability": 0.07953,
+        "probability_ci95": [0.05298, 0.1154],
+        "heldout_auc": 0.8916,
         "outcome": "anyone ISS15+",
-        "model": "field_iss15@3.1.0",
+        "model": "field_iss15@3.2.0",
     },
     "occupants": [
         {
@@ -82,56 +82,56 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
             },
             "region_risk": {
                 "head": {
-                    "probability": 0.01884,
-                    "probability_ci95": [0.01529, 0.02319],
+                    "probability": 0.02464,
+                    "probability_ci95": [0.01757, 0.03444],
                     "ais_level": 3,
                 },
                 "face": {
-                    "probability": 0.01143,
-                    "probability_ci95": [0.006205, 0.02096],
+                    "probability": 0.01259,
+                    "probability_ci95": [0.008044, 0.01966],
                     "ais_level": 2,
                 },
                 "neck": {
-                    "probability": 0.0009985,
-                    "probability_ci95": [0.0004876, 0.002044],
+                    "probability": 0.001079,
+                    "probability_ci95": [0.0005544, 0.002101],
                     "ais_level": 2,
                 },
                 "thorax": {
-                    "probability": 0.07507,
-                    "probability_ci95": [0.05191, 0.1074],
+                    "probability": 0.07707,
+                    "probability_ci95": [0.0545, 0.1079],
                     "ais_level": 3,
                 },
                 "abdomen": {
-                    "probability": 0.01673,
-                    "probability_ci95": [0.00846, 0.03281],
+                    "probability": 0.01561,
+                    "probability_ci95": [0.008834, 0.02744],
                     "ais_level": 3,
                 },
                 "spine": {
-                    "probability": 0.007311,
-                    "probability_ci95": [0.005228, 0.01021],
+                    "probability": 0.009204,
+                    "probability_ci95": [0.006048, 0.01398],
                     "ais_level": 3,
                 },
                 "upper_extremity": {
-                    "probability": 0.01699,
-                    "probability_ci95": [0.01258, 0.02293],
+                    "probability": 0.01549,
+                    "probability_ci95": [0.008799, 0.02715],
                     "ais_level": 3,
                 },
                 "lower_extremity": {
-                    "probability": 0.02686,
-                    "probability_ci95": [0.013, 0.05469],
+                    "probability": 0.03214,
+                    "probability_ci95": [0.01983, 0.05168],
                     "ais_level": 3,
                 },
             },
             "triage": {
                 "iss15_plus": True,
-                "probability": 0.08137,
-                "probability_ci95": [0.05203, 0.1251],
-                "threshold": 0.01749,
+                "probability": 0.07953,
+                "probability_ci95": [0.05356, 0.1165],
+                "threshold": 0.01771,
                 "recommendation": "Transport to a Level I trauma center: vehicle "
                 "telemetry consistent with severe injury (ISS 15 "
                 "or more likely).",
                 "outcome": "ISS15+",
-                "model": "field_iss15@3.1.0",
+                "model": "field_iss15@3.2.0",
                 "operating_point": "sens85",
             },
             "occupant_model": {
@@ -196,8 +196,8 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
             "sha256": "b670eb94214f8538cb2bf5a286f617204aec2c091e667622dc418cd6b1ac7710",
         },
         "field_model": {
-            "version": "3.1.0",
-            "sha256": "50de74b0b0d90d0e0645e27af09b74ff3237f36fdc81df21814be2d47afbe61b",
+            "version": "3.2.0",
+            "sha256": "73d837f4e2ca842bddc1d298eb24fe52ca5a2be9b05ffcffc9aceb24c9c548fc",
         },
         "lpm_parameters:compact_sedan": {
             "version": "compact_sedan",
@@ -209,7 +209,7 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         },
         "triage_code": {
             "version": "0.2.0",
-            "sha256": "f5f612b467a1e0169b3cdb9080180151d98e190d4907fbe8d3869bcce60c3709",
+            "sha256": "6bf8356be5ff889e17ce336c57f742ae3a4f1aeee537c41bc20e2bbc4aee64d5",
         },
         "risk_calibration": {
             "version": "1",

@@ -320,7 +320,19 @@ class CrashIn(WireModel):
     """What the vehicle measured of the crash."""
 
     pulse: PulseIn
-    multiple_impacts: bool = Field(default=False, description="More than one impact event.")
+    multiple_impacts: bool = Field(
+        default=False,
+        description="More than one impact event. Implied by an `impact_count` of 2 or more.",
+    )
+    impact_count: int | None = Field(
+        default=None,
+        ge=1,
+        le=50,
+        description="Impact (harmful) events the vehicle counted, where it counts them (the "
+        "field risk models use it). Omitted: one for a single impact; for multiple impacts "
+        "their data's median (reported as `impact_count_imputed`).",
+        examples=[2],
+    )
     rollover: bool = Field(default=False, description="The vehicle rolled over.")
     rollover_quarter_turns: int | None = Field(
         default=None,
@@ -330,6 +342,24 @@ class CrashIn(WireModel):
         "field risk models). Omitted with `rollover`: their median (reported).",
         examples=[2],
     )
+
+    @model_validator(mode="after")
+    def _impacts_agree(self) -> CrashIn:
+        if self.impact_count is None:
+            return self
+        if self.impact_count >= 2 and "multiple_impacts" in self.model_fields_set:
+            if not self.multiple_impacts:
+                raise ValueError(
+                    f"impact_count {self.impact_count} contradicts multiple_impacts false"
+                )
+        if self.impact_count == 1 and self.multiple_impacts:
+            raise ValueError("impact_count 1 contradicts multiple_impacts true")
+        return self
+
+    @property
+    def multiple(self) -> bool:
+        """Multiple impacts: said, or implied by an impact count of 2 or more."""
+        return self.multiple_impacts or (self.impact_count or 0) >= 2
 
 
 class OccupantIn(WireModel):
@@ -524,11 +554,12 @@ class CrashNotificationIn(WireModel):
                 vehicle_model=self.vehicle.model,
                 drive_side=self.vehicle.drive_side,
                 pulse=self.crash.pulse.to_engine(),
-                multiple_impacts=self.crash.multiple_impacts,
+                multiple_impacts=self.crash.multiple,
                 rollover=self.crash.rollover,
                 occupants=tuple(occupants),
                 model_year=self.vehicle.engine_model_year(),
                 rollover_quarter_turns=self.crash.rollover_quarter_turns,
+                impact_count=self.crash.impact_count,
             ),
             notes,
         )

@@ -75,7 +75,7 @@ class TriageOut(OutModel):
         "(statistical baseline).",
         examples=["ISS15+"],
     )
-    model: str = Field(description="The model that gave it.", examples=["field_iss15@3.1.0"])
+    model: str = Field(description="The model that gave it.", examples=["field_iss15@3.2.0"])
     operating_point: str | None = Field(
         default=None,
         description="Named operating point of the field model whose threshold decided "
@@ -170,7 +170,7 @@ class VehicleRiskOut(OutModel):
         examples=[0.88],
     )
     outcome: str = Field(description="`anyone ISS15+`.", examples=["anyone ISS15+"])
-    model: str = Field(description="The model that gave it.", examples=["field_iss15@3.1.0"])
+    model: str = Field(description="The model that gave it.", examples=["field_iss15@3.2.0"])
 
 
 class OccupantOut(OutModel):

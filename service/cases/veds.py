@@ -390,6 +390,15 @@ def _crash(
         multiple,
         f"{len(read)} pulse(s); indicator {_said(indicator)}",
     )
+    # each pulse is one event the vehicle recorded: two or more count the impacts
+    count = len(read) if len(read) > 1 else None
+    if count is not None:
+        m.map(
+            f"{vehicle_path}/veds:VehicleCrashPulse",
+            "crash.impact_count",
+            count,
+            f"{len(read)} pulses",
+        )
     rolled = m.boolean(vehicle, "veds:VehicleRolloverIndicator", vehicle_path, required=False)
     turns = max(p.quarter_turns for p in read)
     rollover = bool(rolled) or turns > 0
@@ -401,7 +410,7 @@ def _crash(
         rollover,
         f"indicator {_said(rolled)}; most quarter turns {turns}",
     )
-    return {
+    out: dict[str, Any] = {
         "pulse": {
             "kind": "summary",
             "delta_v_kmh": worst.delta_v_kmh,
@@ -411,6 +420,9 @@ def _crash(
         "rollover": rollover,
         "rollover_quarter_turns": turns if turns > 0 else None,
     }
+    if count is not None:
+        out["impact_count"] = count
+    return out
 
 
 def _airbag_states(m: _Mapper, vehicle: Element, vehicle_path: str) -> dict[str, list[bool]]:

@@ -451,9 +451,13 @@ def _collision_group(facts: _Facts, parent: etree._Element, i: int) -> None:
         if element in vehicle:
             w.add(group, element, vehicle[element])
     multiple = facts.given("crash.multiple_impacts")
+    count = facts.given("crash.impact_count")
     if isinstance(multiple, bool):
         w.add(group, "eInjury.21", codes.YES_NO[multiple])
         note.fill("eInjury.21", "crash.multiple_impacts")
+    elif isinstance(count, int):  # a count alone says it: 2 or more are multiple impacts
+        w.add(group, "eInjury.21", codes.YES_NO[count >= 2])
+        note.fill("eInjury.21", "crash.impact_count (2 or more: yes)")
     else:
         note.leave_out("eInjury.21", "multiple impacts not reported")
     pulse = case.result.pulse

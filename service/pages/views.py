@@ -17,7 +17,7 @@ import math
 import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
-from datetime import UTC, datetime
+from datetime import datetime
 from pathlib import Path
 from typing import Any
 from urllib.parse import urlencode
@@ -48,6 +48,7 @@ from service.pages.drawing import (
     pulse_plot,
 )
 from service.pages.regions import RISK_REGION_SHAPES, RiskRegionView, physics_skill, risk_regions
+from service.pages.text import elapsed_text, fmt, parse_time, pct, utc_text
 
 __all__ = [
     "AuditView",
@@ -198,53 +199,6 @@ def _num(value: Any) -> float | None:
         return None
     v = float(value)
     return v if math.isfinite(v) else None
-
-
-def pct(p: float) -> str:
-    """A probability in percent, one decimal."""
-    return f"{100.0 * p:.1f} %"
-
-
-def fmt(v: float) -> str:
-    """A measure with about three significant figures, never in e-notation."""
-    a = abs(v)
-    if a >= 100:
-        return f"{v:.0f}"
-    if a >= 10:
-        return f"{v:.1f}"
-    if a >= 1:
-        return f"{v:.2f}"
-    return f"{v:.3f}"
-
-
-def parse_time(value: Any) -> datetime | None:
-    """An RFC 3339 text or a datetime, as an aware UTC datetime."""
-    if isinstance(value, datetime):
-        at = value
-    elif isinstance(value, str):
-        try:
-            at = datetime.fromisoformat(value)
-        except ValueError:
-            return None
-    else:
-        return None
-    return at.replace(tzinfo=UTC) if at.tzinfo is None else at.astimezone(UTC)
-
-
-def utc_text(at: datetime | None) -> str:
-    return "unknown" if at is None else at.strftime("%Y-%m-%d %H:%M:%S UTC")
-
-
-def elapsed_text(seconds: float) -> str:
-    """A duration in words: 45 s, 12 min, 2 h 05 min, 3 d 4 h."""
-    s = int(abs(seconds))
-    if s < 90:
-        return f"{s} s"
-    if s < 90 * 60:
-        return f"{round(s / 60)} min"
-    if s < 48 * 3600:
-        return f"{s // 3600} h {(s % 3600) // 60:02d} min"
-    return f"{s // 86400} d {(s % 86400) // 3600} h"
 
 
 # ------------------------------------------------------------------ view models
@@ -605,6 +559,16 @@ def _yes_no(value: Any) -> str:
     return "not reported" if value is None else ("YES" if value else "no")
 
 
+def _impacts(crash: Mapping[str, Any]) -> str:
+    """Multiple impacts as the page says it, with the count where sent."""
+    count = crash.get("impact_count")
+    if isinstance(count, int) and count >= 2:
+        return f"YES ({count} impacts)"
+    if count == 1:
+        return "no (1 impact)"
+    return _yes_no(crash.get("multiple_impacts"))
+
+
 def _crash_view(
     notification: Mapping[str, Any],
     result: Mapping[str, Any],
@@ -664,7 +628,7 @@ def _crash_view(
         pdof_deg=pdof,
         diagram=diagram,
         plot=pulse_plot(dict(sent), dict(haversine) or None),
-        multiple_impacts=_yes_no(crash.get("multiple_impacts")),
+        multiple_impacts=_impacts(crash),
         rollover=_yes_no(crash.get("rollover")),
         assumptions=tuple(assumptions),
     )

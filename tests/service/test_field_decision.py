@@ -66,6 +66,44 @@ def test_the_decision_responds_to_what_the_field_data_know(api: ApiClient) -> No
     assert p(age_years=80) > p(age_years=20)
 
 
+def test_the_impact_count_is_read_checked_and_named_when_imputed(api: ApiClient) -> None:
+    field = load_default()
+
+    def post(**crash: object) -> dict[str, object]:
+        body = summary(45.0, 270.0)
+        body["crash"].pop("multiple_impacts")  # the example says false: the count alone
+        body["crash"].update(crash)
+        r = api.client.post("/v1/cases", json=body, headers=api.headers("submitter"))
+        assert r.status_code == 201, r.text
+        return dict(r.json())
+
+    def codes(result: dict[str, object]) -> set[str]:
+        return {a["code"] for a in result["assumptions"]}  # type: ignore[attr-defined]
+
+    guessed = post(multiple_impacts=True)
+    counted = post(impact_count=int(field.impact_count_imputed or 2))  # implies multiple
+    single = post(impact_count=1)
+    assert "multiple_impacts_reported" in codes(counted)
+    assert "impact_count_imputed" not in codes(counted) | codes(single)
+    uses_count = "impact_count" in field.used_inputs
+    assert ("impact_count_imputed" in codes(guessed)) == uses_count
+    p = [float(r["occupants"][0]["triage"]["probability"]) for r in (guessed, counted)]  # type: ignore[index]
+    assert p[0] == p[1], "the imputed count is the count sent"
+    assert "multiple_impacts_reported" not in codes(single)
+    # contradictions and impossible counts are refused, naming the field
+    for crash, said in (
+        ({"impact_count": 3, "multiple_impacts": False}, "impact_count 3 contradicts"),
+        ({"impact_count": 1, "multiple_impacts": True}, "impact_count 1 contradicts"),
+        ({"impact_count": 0}, "impact_count"),
+        ({"impact_count": 2.5}, "impact_count"),
+    ):
+        body = summary(45.0, 270.0)
+        body["crash"].update(crash)
+        r = api.client.post("/v1/cases", json=body, headers=api.headers("submitter"))
+        problem = assert_problem(r, 422)
+        assert said in json.dumps(problem), problem
+
+
 @pytest.mark.parametrize("operating_point", ["acs_cot", "sens85"])
 def test_the_operating_point_is_configurable(tmp_path: Path, operating_point: str) -> None:
     settings = Settings(

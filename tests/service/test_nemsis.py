@@ -339,6 +339,17 @@ def test_rollover_multiple_impacts_and_the_decision(api: ApiClient) -> None:
     assert _text(group, "n:eInjury.24") == "12"  # 345 deg: nearer 12 than 11
 
 
+def test_an_impact_count_alone_says_whether_there_were_multiple_impacts(api: ApiClient) -> None:
+    for count, code in ((3, "9923003"), (1, "9923001")):
+        body = summary(40.0, 0.0)
+        del body["crash"]["multiple_impacts"]
+        body["crash"]["impact_count"] = count
+        _, tree = _record(api, post_case(api, body)["case_id"])
+        (pcr,) = _reports(tree)
+        group = pcr.find("n:eInjury/n:eInjury.CollisionGroup", NS)
+        assert _text(group, "n:eInjury.21") == code, count
+
+
 def test_a_case_not_for_the_trauma_center_says_no(api: ApiClient) -> None:
     result = post_case(api, _unbelted_minor())
     assert result["triage"]["iss15_plus"] is False, "precondition: a minor crash"

@@ -34,6 +34,7 @@ from tests.service.pages_support import (
     side_edr,
 )
 from tests.support import ApiClient, assert_problem, post_case, stored_case
+from tests.support import summary as summary_body
 
 # ---------------------------------------------------------------- helpers
 
@@ -162,6 +163,21 @@ def test_the_head_injury_case_marks_the_head_on_the_body_map(api: ApiClient) -> 
     assert page.text(region) == str(head), "the AIS number is written on the region"
     row = page.one("tr", within="occupant-0", data_region="head_neck")
     assert page.text(row).startswith(f"Head and neck {head} (")
+
+
+def test_the_crash_facts_say_how_many_impacts_were_counted(api: ApiClient) -> None:
+    said = {}
+    for name, crash in (
+        ("counted", {"impact_count": 3}),
+        ("single", {"impact_count": 1, "multiple_impacts": False}),
+        ("uncounted", {"multiple_impacts": True}),
+    ):
+        body = summary_body(35.0, 0.0)
+        body["crash"].pop("multiple_impacts")
+        body["crash"].update(crash)
+        page = _page(api, post_case(api, body)["case_id"])
+        said[name] = page.text(page.by_class("multiple-impacts")[0])
+    assert said == {"counted": "YES (3 impacts)", "single": "no (1 impact)", "uncounted": "YES"}
 
 
 # ---------------------------------------------------------------- stored, not recomputed

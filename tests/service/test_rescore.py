@@ -233,36 +233,41 @@ def test_cases_decided_by_2_0_0_are_rescored_with_the_iss15_model(
     assert _snapshot(mais3_api) == before, "the stored records are not altered"
 
 
-#: The first ISS 15+ model (regressions only), retired as the decision by 3.1.0.
-ISS15_FIRST = "3.0.0"
+#: Earlier ISS 15+ models: 3.0.0 (regressions only), retired as the decision by 3.1.0
+#: (bags of boosted trees), retired by 3.2.0 (feature set 2); both of feature set 1.
+ISS15_EARLIER = ("3.0.0", "3.1.0")
 
 
-@pytest.fixture
-def iss15_first_api(sqlite_url: str, tmp_path: Path) -> Iterator[ApiClient]:
-    """The service as it ran with field model 3.0.0."""
-    yield from _api(sqlite_url, tmp_path, field_artifact=artifact_for_version(ISS15_FIRST))
+@pytest.fixture(params=ISS15_EARLIER)
+def iss15_old_api(
+    request: pytest.FixtureRequest, sqlite_url: str, tmp_path: Path
+) -> Iterator[ApiClient]:
+    """The service as it ran with an earlier ISS 15+ field model."""
+    yield from _api(sqlite_url, tmp_path, field_artifact=artifact_for_version(request.param))
 
 
-def test_cases_decided_by_3_0_0_are_rescored_with_the_shipped_model(
-    iss15_first_api: ApiClient,
+def test_cases_decided_by_earlier_iss15_models_are_rescored_with_the_shipped_model(
+    iss15_old_api: ApiClient,
 ) -> None:
-    """Cases decided by 3.0.0 rescored with the shipped version: both answer ISS 15+; the
-    report carries both versions and each case's new probability is the shipped model's
+    """Cases decided by 3.0.0 or 3.1.0 rescored with the shipped version: all answer ISS 15+;
+    the report carries both versions and each case's new probability is the shipped model's
     answer to the same notification; nothing stored changes."""
     new = load_default()
-    assert new.version != ISS15_FIRST
-    answered = _submit_cases(iss15_first_api)
-    assert all(a["triage"]["model"] == f"field_iss15@{ISS15_FIRST}" for a in answered.values())
+    answered = _submit_cases(iss15_old_api)
+    old = next(iter(answered.values()))["triage"]["model"].removeprefix("field_iss15@")
+    assert old in ISS15_EARLIER
+    assert new.version != old
+    assert all(a["triage"]["model"] == f"field_iss15@{old}" for a in answered.values())
     assert all(a["triage"]["outcome"] == "ISS15+" for a in answered.values())
-    before = _snapshot(iss15_first_api)
-    sessions = iss15_first_api.client.app.state.ctx.sessions  # type: ignore[attr-defined]
+    before = _snapshot(iss15_old_api)
+    sessions = iss15_old_api.client.app.state.ctx.sessions  # type: ignore[attr-defined]
     report = rescore(sessions, load_engine_models(field_artifact=artifact_for_version(new.version)))
     assert report.cases == len(answered)
     assert not report.refused
     by_id = {r.case_id: r for r in report.rows}
     assert set(by_id) == set(answered)
     for case_id, r in by_id.items():
-        assert r.old_model == f"field_iss15@{ISS15_FIRST}"
+        assert r.old_model == f"field_iss15@{old}"
         assert r.new_model == f"field_iss15@{new.version}"
         assert r.old_probability == answered[case_id]["triage"]["probability"]
         assert r.new_probability != r.old_probability  # another model, another number
@@ -273,4 +278,4 @@ def test_cases_decided_by_3_0_0_are_rescored_with_the_shipped_model(
         if a["event_id"].startswith("recall-") and int(a["event_id"].split("-")[1]) % 3 != 0
     ]
     assert belted == sorted(belted)
-    assert _snapshot(iss15_first_api) == before, "the stored records are not altered"
+    assert _snapshot(iss15_old_api) == before, "the stored records are not altered"

@@ -96,9 +96,10 @@ JSON_TWINS: dict[str, dict[str, Any]] = {
         "occurred_at": "2026-11-23T09:02:11+01:00",
         "vehicle": {"model_year": 2012},
         "crash": {
-            # the larger of the two pulses; both count as multiple impacts
+            # the larger of the two pulses; both count as multiple impacts, two of them
             "pulse": {"kind": "summary", "delta_v_kmh": 48.3, "pdof_deg": 0.0},
             "multiple_impacts": True,
+            "impact_count": 2,
             "rollover": True,
             # the most quarter turns of any pulse
             "rollover_quarter_turns": 4,
@@ -186,6 +187,10 @@ def test_several_pulses_and_quarter_turns_are_multiple_impacts_and_rollover(
     assert "veds_airbag_ambiguous" in codes, "one FRONT airbag deployed, one not"
     assert result["pulse"]["delta_v_kmh"] == pytest.approx(48.3)
     assert {o["field_mode"] for o in result["occupants"]} == {"rollover"}
+    # two pulses are two impacts the vehicle counted: no count is imputed
+    assert "impact_count_imputed" not in codes
+    stored = stored_case(api, result["case_id"])
+    assert stored["notification"]["crash"]["impact_count"] == 2
 
 
 def test_the_rfc8148_example_is_triaged_stored_with_its_xml_and_replayed(api: ApiClient) -> None:

@@ -1,7 +1,7 @@
 """The NASS-CDS occupant rows as the field risk models' inputs and outcomes.
 
 :func:`risk_arrays` turns the fitted population's rows into the raw input
-arrays that :func:`models.field.risk_features.design_columns` takes (the same
+arrays that :func:`models.field.risk_impacts.design_columns_2` takes (the same
 function the service builds its rows with), unknown inputs imputed by the
 population's values (:func:`population_imputation`), as the service imputes
 them. :func:`outcomes` gives the 0/1 outcomes: ISS 15+ and, per body region,
@@ -18,12 +18,14 @@ import pandas as pd
 
 from models.arrays import FloatArray
 from models.field.risk_features import RiskImputation
+from models.field.risk_impacts import IMPACT_COUNT_CLAMP
 from models.offline.field.occupants import ISS15_PLUS, REGIONS, pdof_from_components_deg
 
 __all__ = [
     "MIN_REGION_POSITIVES",
     "Outcome",
     "outcomes",
+    "impact_count_imputation",
     "population_imputation",
     "risk_arrays",
 ]
@@ -70,13 +72,20 @@ def population_imputation(rows: pd.DataFrame) -> RiskImputation:
     )
 
 
+def impact_count_imputation(rows: pd.DataFrame) -> float:
+    """The impact count taken for multiple impacts of unknown count: the median
+    harmful events of the rows with two or more."""
+    n = rows["n_events"].to_numpy(dtype=np.float64)
+    return float(np.median(np.clip(n[n >= 2], *IMPACT_COUNT_CLAMP)))
+
+
 def risk_arrays(rows: pd.DataFrame, imputation: RiskImputation) -> dict[str, object]:
     """Raw input arrays of the rows (unknowns imputed), each shape (n,).
 
     The direction of the delta-V comes from its components (what a
     notification's pulse gives); rolled means at least one quarter turn
     (unknown quarter turns: not rolled); multiple impacts means two or more
-    harmful events.
+    harmful events, and the impact count is their number (clamped as served).
     """
     imp = imputation
     qt = rows["rollover_quarter_turns"].fillna(0.0).to_numpy(dtype=np.float64)
@@ -94,6 +103,7 @@ def risk_arrays(rows: pd.DataFrame, imputation: RiskImputation) -> dict[str, obj
         "rollover": (qt > 0).astype(np.float64),
         "quarter_turns": qt,
         "multiple_impacts": (rows["n_events"] >= 2).to_numpy(dtype=np.float64),
+        "impact_count": np.clip(rows["n_events"].to_numpy(dtype=np.float64), *IMPACT_COUNT_CLAMP),
         "age_years": rows["age_years"].to_numpy(dtype=np.float64),
         "female": rows["female"].fillna(imp.female).to_numpy(dtype=np.float64),
         "stature_cm": rows["stature_cm"].fillna(imp.stature_cm).to_numpy(dtype=np.float64),

@@ -8,12 +8,15 @@ in the vehicle ISS 15+):
 
 1. **Population and inputs** (:mod:`.occupants`, :mod:`.risk_data`): adults in
    seats a notification can name, every notification field the file holds,
-   as :func:`models.field.risk_features.design_columns` builds it.
+   as :func:`models.field.risk_impacts.design_columns_2` builds it (feature
+   set 2: set 1's columns, the PDOF seen from the occupant's side and the
+   impact count).
 2. **Folds by crash**: every crash (year, psu, caseno) in one fold.
 3. **Model**: an L2-penalised logistic regression with splines of delta-V and
    age and delta-V slopes by crash mode and belt, or, where cross-validation
-   prefers it, a bag of boosted trees on the same inputs (:mod:`.risk_boosted`)
-   (the ranking fit, unweighted),
+   prefers it, a bag of boosted trees on the same inputs (:mod:`.risk_boosted`),
+   plus feature set 2's tree-only groups where one member's cross-validated
+   log loss says they help (the ranking fit, unweighted),
    then ``logit P = a + b eta`` fitted with the national weights ``ratwgt``
    (the probability means "of such occupants in US towaway crashes"). The
    penalty is chosen by cross-validated log loss; each input group is kept only
@@ -40,7 +43,7 @@ import hashlib
 import json
 import pickle
 from collections.abc import Callable, Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any, Final, TypeVar
 
@@ -49,23 +52,53 @@ import pandas as pd
 from tqdm import tqdm
 
 from models.arrays import FloatArray, IntArray
-from models.field.risk_features import (
-    ALL_COLUMNS,
-    FEATURE_GROUPS,
-    RiskImputation,
-    design_columns,
+from models.field.risk_features import FEATURE_GROUPS, RiskImputation
+from models.field.risk_impacts import (
+    ALL_COLUMNS_2,
+    FEATURE_GROUPS_2,
+    IMPACT_GROUPS,
+    design_columns_2,
 )
 from models.offline.field.occupants import crash_keys, fit_population, load_occupants
+from models.offline.field.risk_blend import BlendFitted
 from models.offline.field.risk_boosted import BoostedFitted, fit_bag, single_boosted
 from models.offline.field.risk_core import Fitted, expit, fit_model, logit
-from models.offline.field.risk_data import Outcome, outcomes, population_imputation, risk_arrays
+from models.offline.field.risk_data import (
+    Outcome,
+    impact_count_imputation,
+    outcomes,
+    population_imputation,
+    risk_arrays,
+)
 
 __all__ = [
     "DRIFT_VARIANTS",
+    "REGRESSION_GROUPS",
+    "TREE_GROUPS",
     "RiskConfig",
     "RiskData",
     "load_risk_data",
 ]
+
+#: Candidate groups of the regression (its backward pass keeps some): feature
+#: set 1's and the impact count (a count has a linear effect on the log-odds to
+#: try, as the plain regression does).
+REGRESSION_GROUPS: Final[tuple[str, ...]] = (*FEATURE_GROUPS, "impact_count")
+
+#: Groups offered to the trees beyond the regression's kept ones (feature set
+#: 2's): a signed angle is no linear effect, and the count where the regression
+#: dropped it. [R] Out of fold on the folds by crash (2026-12-06, bag of 10,
+#: ISS 15+) the two raised the AUC from 0.8870 to 0.8905; the fit keeps them
+#: per outcome only where one member's cross-validated log loss falls with them.
+TREE_GROUPS: Final[tuple[str, ...]] = tuple(IMPACT_GROUPS)
+
+#: Bag weights of the blend tried (``w``; 0 and 1 are the two kinds alone).
+#: [R] A coarse grid: the cross-validated log loss is flat near its minimum
+#: (upper extremity, 2026-12-06: 0.08720, 0.08716, 0.08727 at 0.25, 0.5, 0.75).
+BLEND_WEIGHTS: Final[tuple[float, ...]] = (0.25, 0.5, 0.75)
+
+#: A fitted model of any kind.
+AnyFitted = Fitted | BoostedFitted | BlendFitted
 
 T = TypeVar("T")
 
@@ -139,7 +172,9 @@ class RiskData:
     rows : pandas.DataFrame
     removed : tuple of (str, int)
     imputation : RiskImputation
-    x : ndarray, shape (n, len(ALL_COLUMNS))
+    impact_count_imputed : float
+        The impact count served for multiple impacts of unknown count.
+    x : ndarray, shape (n, len(ALL_COLUMNS_2))
     w : ndarray, shape (n,)
         ``ratwgt``.
     crash, vehicle : ndarray of int, shape (n,)
@@ -152,6 +187,7 @@ class RiskData:
     rows: pd.DataFrame
     removed: tuple[tuple[str, int], ...]
     imputation: RiskImputation
+    impact_count_imputed: float
     x: FloatArray
     w: FloatArray
     crash: IntArray
@@ -162,12 +198,12 @@ class RiskData:
 
     def column(self, name: str) -> FloatArray:
         """One design column by name."""
-        out: FloatArray = self.x[:, ALL_COLUMNS.index(name)]
+        out: FloatArray = self.x[:, ALL_COLUMNS_2.index(name)]
         return out
 
 
 def _mode_labels(x: FloatArray) -> np.ndarray:
-    col = {n: x[:, i] for i, n in enumerate(ALL_COLUMNS)}
+    col = {n: x[:, i] for i, n in enumerate(ALL_COLUMNS_2)}
     mode = np.full(x.shape[0], "frontal", dtype=object)
     mode[col["rear"] > 0] = "rear"
     mode[col["far_side"] > 0] = "far_side"
@@ -185,13 +221,14 @@ def load_risk_data(subsample: float = 1.0, seed: int = 0) -> RiskData:
         keep = np.random.default_rng(seed).random(crash.max() + 1) < subsample
         rows = rows[keep[crash]].reset_index(drop=True)
     imputation = population_imputation(rows)
-    x = design_columns(risk_arrays(rows, imputation))  # type: ignore[arg-type]
+    x = design_columns_2(risk_arrays(rows, imputation))  # type: ignore[arg-type]
     crash = crash_keys(rows)
     vehicle, _ = pd.factorize(crash.astype(str) + ":" + rows["vehno"].astype(str))
     return RiskData(
         rows=rows,
         removed=pop.removed,
         imputation=imputation,
+        impact_count_imputed=impact_count_imputation(rows),
         x=x,
         w=rows["ratwgt"].to_numpy(dtype=np.float64),
         crash=crash,
@@ -233,8 +270,8 @@ class _Cache:
 
 def group_columns(groups: Sequence[str]) -> list[int]:
     """Design column indices of the intercept and `groups`."""
-    names = {c for g in groups for c in FEATURE_GROUPS[g]}
-    return [0] + [i for i, n in enumerate(ALL_COLUMNS) if n in names]
+    names = {c for g in groups for c in FEATURE_GROUPS_2[g]}
+    return [0] + [i for i, n in enumerate(ALL_COLUMNS_2) if n in names]
 
 
 def _drift(name: str) -> tuple[bool, bool]:
@@ -257,9 +294,11 @@ def _groups_for(groups: Sequence[str], drift: str) -> list[str]:
 class Spec:
     """What one outcome's model is: its groups, penalty, drift treatment and kind.
 
-    ``kind`` is ``logistic`` (the penalised regression) or ``boosted`` (a bag of
-    boosted trees on the same groups' columns, :mod:`.risk_boosted`, with
-    ``n_trees`` trees per member).
+    ``kind`` is ``logistic`` (the penalised regression), ``boosted`` (a bag of
+    boosted trees on the same groups' columns and `tree_groups`',
+    :mod:`.risk_boosted`, with ``n_trees`` trees per member) or ``blend`` (both,
+    their calibrated logits weighted ``1 - weight`` and ``weight``,
+    :mod:`.risk_blend`).
     """
 
     groups: tuple[str, ...]
@@ -267,17 +306,29 @@ class Spec:
     drift: str
     kind: str = "logistic"
     n_trees: int = 0
+    tree_groups: tuple[str, ...] = ()
+    weight: float = 0.0
+
+    def part(self, kind: str) -> Spec:
+        """The ``logistic`` or ``boosted`` part of a blend."""
+        return replace(self, kind=kind, weight=0.0)
 
 
-def boosted_columns(groups: Sequence[str]) -> list[int]:
-    """Design columns a boosted model of `groups` splits on (no intercept)."""
-    return group_columns(groups)[1:]
+def boosted_columns(groups: Sequence[str], tree_groups: Sequence[str] = ()) -> list[int]:
+    """Design columns a boosted model of `groups` (and `tree_groups`) splits on (no intercept)."""
+    return group_columns([*groups, *tree_groups])[1:]
 
 
 def fit_spec(
     d: RiskData, y: FloatArray, rows: IntArray, spec: Spec, config: RiskConfig
-) -> Fitted | BoostedFitted:
+) -> AnyFitted:
     """Fit `spec` on `rows` (ranking fit and weighted recalibration)."""
+    if spec.kind == "blend":
+        lr = fit_spec(d, y, rows, spec.part("logistic"), config)
+        bag = fit_spec(d, y, rows, spec.part("boosted"), config)
+        assert isinstance(lr, Fitted)
+        assert isinstance(bag, BoostedFitted)
+        return BlendFitted(lr, bag, spec.weight)
     _, latest = _drift(spec.drift)
     cal = None
     if latest:
@@ -289,7 +340,7 @@ def fit_spec(
             y[rows],
             d.w[rows],
             d.crash[rows],
-            boosted_columns(spec.groups),
+            boosted_columns(spec.groups, spec.tree_groups),
             spec.n_trees,
             config.boost_members,
             config.seed,
@@ -301,7 +352,7 @@ def fit_spec(
 def served_x(d: RiskData, rows: IntArray, reference_year: float) -> FloatArray:
     """Design rows as served: the accident year set to the reference (latest fitted) year."""
     x = d.x[rows].copy()
-    x[:, ALL_COLUMNS.index("accident_year")] = reference_year
+    x[:, ALL_COLUMNS_2.index("accident_year")] = reference_year
     return x
 
 
@@ -355,7 +406,7 @@ def select_spec(
     ndarray, shape (n,)
         Held-out (out-of-fold) calibrated probability of the chosen spec.
     """
-    groups = _groups_for(tuple(FEATURE_GROUPS), drift)
+    groups = _groups_for(REGRESSION_GROUPS, drift)
     c_loss = {}
     for c in config.c_grid:
         p, _ = oof_probability(d, y, Spec(tuple(groups), c, drift), folds, config)
@@ -404,32 +455,56 @@ def choose_kind(
     logistic: Spec,
     progress: tqdm | None = None,
 ) -> tuple[Spec, dict[str, Any], FloatArray]:
-    """The regression or a bag of boosted trees on its groups, by cross-validated log loss.
+    """The regression, a bag of boosted trees on its groups, or a blend, by cross-validated
+    log loss.
 
     The trees per member are chosen first on one member's cross-validated log
-    loss; then the regression and the bag are compared on the log loss of
-    their calibrated held-out probabilities (the criterion of the groups'
-    selection). Returns the chosen spec, ``tree_loss``, ``kind_loss``,
-    ``kind``, and the chosen spec's held-out probability.
+    loss, then (at that number) whether the trees also get :data:`TREE_GROUPS`;
+    then the regression, the bag and their blends (:data:`BLEND_WEIGHTS`, the
+    blend of the two held-out calibrated logits: what a blend fitted on each
+    training part predicts) are compared on the log loss of their calibrated
+    held-out probabilities (the criterion of the groups' selection). Returns
+    the chosen spec, ``tree_loss``, ``tree_groups_loss``, ``kind_loss``
+    (``blend_0.5`` etc. for the blends), ``kind``, ``blend_weight``, and the
+    chosen spec's held-out probability.
     """
     cols = boosted_columns(logistic.groups)
     tree_loss = {n: _tree_loss(d, y, folds, cols, n, config.seed) for n in config.boost_tree_grid}
     n_best = min(tree_loss, key=lambda n: tree_loss[n])
-    boosted = Spec(logistic.groups, logistic.c, logistic.drift, "boosted", n_best)
+    with_groups = boosted_columns(logistic.groups, TREE_GROUPS)
+    groups_loss = {
+        "without": tree_loss[n_best],
+        "with": _tree_loss(d, y, folds, with_groups, n_best, config.seed),
+    }
+    extra = TREE_GROUPS if groups_loss["with"] < groups_loss["without"] else ()
+    boosted = Spec(logistic.groups, logistic.c, logistic.drift, "boosted", n_best, extra)
     kind_loss, oof = {}, {}
+    specs = {"logistic": logistic, "boosted": boosted}
     for spec in (logistic, boosted):
         oof[spec.kind], _ = oof_probability(d, y, spec, folds, config)
         kind_loss[spec.kind] = log_loss(y, oof[spec.kind])
+    for w in BLEND_WEIGHTS:
+        key = f"blend_{w:g}"
+        specs[key] = replace(boosted, kind="blend", weight=w)
+        oof[key] = expit((1.0 - w) * logit(oof["logistic"]) + w * logit(oof["boosted"]))
+        kind_loss[key] = log_loss(y, oof[key])
     if progress is not None:
         progress.update()
-    chosen = boosted if kind_loss["boosted"] < kind_loss["logistic"] else logistic
-    out = {"tree_loss": tree_loss, "kind_loss": kind_loss, "kind": chosen.kind}
-    return chosen, out, oof[chosen.kind]
+    best = min(kind_loss, key=lambda k: kind_loss[k])
+    chosen = specs[best]
+    out = {
+        "tree_loss": tree_loss,
+        "tree_groups_loss": groups_loss,
+        "kind_loss": kind_loss,
+        "kind": chosen.kind,
+        "blend_weight": chosen.weight,
+    }
+    return chosen, out, oof[best]
 
 
 def temporal_probability(
     d: RiskData, y: FloatArray, spec: Spec, cut: int, lo: int, hi: int, config: RiskConfig
-) -> tuple[IntArray, FloatArray, Fitted | BoostedFitted]:
+) -> tuple[IntArray, FloatArray, AnyFitted]:
     """Fit on accident years <= `cut`, predict years `lo`-`hi` as served (year clamped)."""
     tr = np.flatnonzero(d.year <= cut)
     te = np.flatnonzero((d.year >= lo) & (d.year <= hi))

@@ -279,19 +279,36 @@ def _selection(doc: dict[str, Any]) -> list[str]:
         "",
         "Then the kind: the regression on the kept groups against a bag of "
         f"{cfg_members(doc)} boosted-tree models on the same inputs (trees of depth 3, the number "
-        "of trees per member chosen by one member's cross-validated log loss), by the same "
-        "held-out log loss of the calibrated probability:",
+        "of trees per member chosen by one member's cross-validated log loss; then, by the same "
+        "member's log loss, whether the trees also get the tree-only inputs of feature set 2, the "
+        "PDOF seen from the occupant's side and the impact count), and blends of the two "
+        "(calibrated logits weighted `1 - w` and `w`), by the same held-out log loss of the "
+        "calibrated probability:",
         "",
-        "| outcome | regression log loss | boosted log loss | trees per member | served kind |",
-        "|---|---|---|---|---|",
+        "| outcome | regression log loss | boosted log loss | best blend log loss (w) "
+        "| trees per member "
+        "| one member's log loss without / with PDOF seen from the seat and impact count "
+        "| served kind |",
+        "|---|---|---|---|---|---|---|",
     ]
     for o in doc["outcomes"].values():
         s = o["selection"]
         k = s["kind_loss"]
         trees = min(s["tree_loss"], key=lambda n: s["tree_loss"][n])
+        g = s.get("tree_groups_loss")
+        extra = (
+            "-"
+            if g is None
+            else f"{_f(g['without'], 5)} / {_f(g['with'], 5)}"
+            + (" (kept)" if o.get("tree_groups") else "")
+        )
+        blends = {n.removeprefix("blend_"): v for n, v in k.items() if n.startswith("blend_")}
+        best = min(blends, key=lambda n: blends[n]) if blends else None
+        blend = "-" if best is None else f"{_f(blends[best], 5)} ({best})"
+        served = o["kind"] + (f" (w = {o['weight_boosted']:g})" if o["kind"] == "blend" else "")
         lines.append(
-            f"| {o['label']} | {_f(k['logistic'], 5)} | {_f(k['boosted'], 5)} | {trees} "
-            f"| **{o['kind']}** |"
+            f"| {o['label']} | {_f(k['logistic'], 5)} | {_f(k['boosted'], 5)} | {blend} "
+            f"| {trees} | {extra} | **{served}** |"
         )
     return lines
 
@@ -420,6 +437,12 @@ def _temporal(doc: dict[str, Any]) -> list[str]:
     return lines
 
 
+def _inputs_of(o: dict[str, Any]) -> list[str]:
+    """The groups an outcome model uses (a bag's tree-only groups included)."""
+    extra = o.get("tree_groups", []) if o["kind"] in ("boosted", "blend") else []
+    return [*o["groups"], *extra]
+
+
 def _regions(doc: dict[str, Any]) -> list[str]:
     lines = [
         "| region (outcome) | kind | positives | AUC [95 % CI] | AUC weighted | "
@@ -434,7 +457,7 @@ def _regions(doc: dict[str, Any]) -> list[str]:
             f"{_ci(h['auc_ci95'])} | "
             f"{_f(h['auc_weighted'])} | {_f(h['p_over_o_weighted'], 2)} "
             f"{_ci(h['p_over_o_weighted_ci95'], 2)} | {_f(o['plain']['auc'])} | "
-            f"{_f(o['delta_v_alone']['auc'])} | {', '.join(o['groups'])} |"
+            f"{_f(o['delta_v_alone']['auc'])} | {', '.join(_inputs_of(o))} |"
         )
     return lines
 
@@ -456,8 +479,12 @@ def _card(doc: dict[str, Any]) -> str:
         "where AIS 3+ is too rare to fit: named in the outcome label) and P(anyone in the vehicle "
         "ISS 15+). Each is, as cross-validation by crash chose per outcome, either an "
         "L2-penalised logistic regression (splines of delta-V and age, delta-V slopes by crash "
-        f"mode and belt) or a bag of {cfg['boost_members']} boosted-tree models (depth 3) each "
-        "fitted on a resample of whole crashes, fitted unweighted for ranking, then recalibrated "
+        f"mode and belt), a bag of {cfg['boost_members']} boosted-tree models (depth 3) each "
+        "fitted on a resample of whole crashes (on the regression's inputs and, where one "
+        "member's cross-validated log loss falls with them, the PDOF seen from the occupant's "
+        "side and the vehicle's impact count: feature set 2, `models/field/risk_impacts.py`), "
+        "or a blend of the two (their calibrated logits weighted; the regression's refits on "
+        "the bag's resamples), fitted unweighted for ranking, then recalibrated "
         "with the national weights `ratwgt` (a bag on its out-of-bag scores): the probability "
         "means *of such occupants in US towaway crashes*. ISS 15+ is "
         f"**{iss['kind']}**; the regions: "
@@ -475,7 +502,14 @@ def _card(doc: dict[str, Any]) -> str:
         "Unknown inputs take the population's values (age, stature, mass: medians; sex: the "
         "share of "
         "women; model year: the latest year's median; quarter turns of a reported rollover: the "
-        "median of rolled vehicles) and are named in the answer's assumptions. The accident year, "
+        "median of rolled vehicles"
+        + (
+            "; the impact count of reported multiple impacts: the median of vehicles with two or "
+            f"more harmful events, {doc['imputation']['impact_count']:g}; a single impact is one"
+            if "impact_count" in doc["imputation"]
+            else ""
+        )
+        + ") and are named in the answer's assumptions. The accident year, "
         f"where a model keeps it, is served at {doc['imputation']['accident_year']:g} "
         "(the latest fitted).",
         "",

@@ -20,7 +20,7 @@ from tqdm import tqdm
 from models.arrays import FloatArray, IntArray
 from models.field.features import FieldInputs, FieldMode
 from models.field.model import FieldModel
-from models.field.risk_features import ALL_COLUMNS, FEATURE_GROUPS
+from models.field.risk_impacts import ALL_COLUMNS_2
 from models.field.risk_model import (
     ARTIFACT_SCHEMA,
     OUTCOME,
@@ -31,10 +31,12 @@ from models.field.versions import artifact_for_version
 from models.offline.field.metrics import threshold_for_sensitivity
 from models.offline.field.occupants import OCCUPANTS_CSV, POPULATION_RULES
 from models.offline.field.published import NHTSA_ALL
+from models.offline.field.risk_blend import BlendFitted
 from models.offline.field.risk_boosted import BoostedFitted
-from models.offline.field.risk_core import crash_folds, expit, fit_model
+from models.offline.field.risk_core import Fitted, crash_folds, expit, fit_model
 from models.offline.field.risk_data import Outcome
 from models.offline.field.risk_fit import (
+    REGRESSION_GROUPS,
     RiskConfig,
     RiskData,
     Spec,
@@ -59,7 +61,9 @@ MODEL_NAME: Final[str] = "field_iss15"
 #: 3.1.0 (2026-12-06): a bag of boosted trees where cross-validation prefers it;
 #: held-out figures and the drift treatment scored as served (no accident-year
 #: term chosen); the default point's margin over the positives the check counts.
-MODEL_VERSION: Final[str] = "3.1.0"
+#: 3.2.0 (2026-12-06): feature set 2 (:mod:`models.field.risk_impacts`): the
+#: trees may split on the PDOF seen from the occupant's side and the impact count.
+MODEL_VERSION: Final[str] = "3.2.0"
 
 #: Groups of the plain regression: linear main effects of every notification
 #: field, unpenalised, no splines or interactions (the reference to match).
@@ -67,7 +71,7 @@ PLAIN_COLUMNS: Final[tuple[str, ...]] = tuple(
     (
         "intercept delta_v_kmh near_side far_side rear belted airbag_deployed "
         "airbag_not_deployed driver front_middle row2 row3 age_years female stature_cm "
-        "mass_kg rollover multiple_impacts model_year"
+        "mass_kg rollover multiple_impacts impact_count model_year"
     ).split()
 )
 
@@ -83,7 +87,7 @@ class RiskFit:
 
 
 def _cols(names: Sequence[str]) -> list[int]:
-    return [ALL_COLUMNS.index(n) for n in names]
+    return [ALL_COLUMNS_2.index(n) for n in names]
 
 
 def _fixed_oof(
@@ -116,7 +120,7 @@ def _hgb_oof(
 def _legacy_probability(d: RiskData) -> FloatArray:
     """P(MAIS 3+) of field model 2.0.0 for every row (its own inputs)."""
     model = FieldModel.from_artifact(artifact_for_version("2.0.0"))
-    col = {n: d.x[:, i] for i, n in enumerate(ALL_COLUMNS)}
+    col = {n: d.x[:, i] for i, n in enumerate(ALL_COLUMNS_2)}
     rows = d.rows
     out = np.empty(len(rows))
     for i in range(len(rows)):
@@ -197,7 +201,7 @@ def _vehicle_heldout(
 
 
 def _subgroups(d: RiskData) -> dict[str, np.ndarray]:
-    col = {n: d.x[:, i] for i, n in enumerate(ALL_COLUMNS)}
+    col = {n: d.x[:, i] for i, n in enumerate(ALL_COLUMNS_2)}
     out = {
         f"mode={m}": d.mode == m for m in ("frontal", "near_side", "far_side", "rear", "rollover")
     }
@@ -221,7 +225,9 @@ def _outcome_stage(
 ) -> dict[str, Any]:
     """Selection, held-out figures (the model, the plain regression, delta-V alone), temporal."""
     bar = tqdm(
-        total=len(config.c_grid) + len(FEATURE_GROUPS) + 1, desc=f"select {o.name}", leave=False
+        total=len(config.c_grid) + len(REGRESSION_GROUPS) + 1,
+        desc=f"select {o.name}",
+        leave=False,
     )
     spec, selection, p = select_spec(d, o.y, folds, config, drift, bar)
     bar.close()
@@ -272,7 +278,7 @@ def bootstrap_chunk(
             if spec.kind != "logistic":  # a bag's members are its bootstrap
                 continue
             f = fit_spec(d, ys[name], ix.astype(np.int64), spec, config)
-            assert not isinstance(f, BoostedFitted)
+            assert isinstance(f, Fitted)
             out[name][0].append(f.beta)
             out[name][1].append(np.array(f.calibration))
     return {n: (np.array(b), np.array(c)) for n, (b, c) in out.items() if b}
@@ -290,7 +296,7 @@ def _bootstrap_refits(
             return bootstrap_chunk(d, specs, config, c)
 
         chunks.append(cache.get(f"bootstrap_{c}", compute))
-    return {
+    out = {
         n: (
             np.concatenate([ch[n][0] for ch in chunks]),
             np.concatenate([ch[n][1] for ch in chunks]),
@@ -298,6 +304,35 @@ def _bootstrap_refits(
         for n, spec in specs.items()
         if spec.kind == "logistic"
     }
+    ys = {o.name: o.y for o in d.outcomes}
+    for n, spec in specs.items():
+        if spec.kind == "blend":
+
+            def refits(n: str = n, spec: Spec = spec) -> tuple[FloatArray, FloatArray]:
+                return blend_refits(d, ys[n], spec, config)
+
+            out[n] = cache.get(f"blend_bootstrap_{n}", refits)
+    return out
+
+
+def blend_refits(
+    d: RiskData, y: FloatArray, spec: Spec, config: RiskConfig
+) -> tuple[FloatArray, FloatArray]:
+    """A blend's regression refitted on its bag's resamples of whole crashes, in order.
+
+    Member ``j`` of the bag and refit ``j`` see the same crashes, so the blend
+    of the two is a bootstrap refit of the blend (the served interval's spread).
+    Returns ``(B, k)`` coefficients and ``(B, 2)`` calibrations.
+    """
+    part = spec.part("logistic")
+    betas, cals = [], []
+    resamples = crash_resamples(d.crash, config.boost_members, config.seed)  # as fit_bag's
+    for ix in tqdm(resamples, desc="blend: regression on the bag's resamples", leave=False):
+        f = fit_spec(d, y, ix.astype(np.int64), part, config)
+        assert isinstance(f, Fitted)
+        betas.append(f.beta)
+        cals.append(np.array(f.calibration))
+    return np.array(betas), np.array(cals)
 
 
 def _file_sha256(path: Path) -> str:
@@ -326,7 +361,7 @@ def fit_risk(config: RiskConfig | None = None, cache_dir: Path | None = None) ->
     resamples = crash_resamples(d.crash, cfg.n_metric_bootstrap, cfg.seed + 1)
     iss = d.outcomes[0]
     drift, drift_table = cache.get(
-        "drift", lambda: choose_drift(d, iss.y, tuple(FEATURE_GROUPS), 1.0, cfg, folds)
+        "drift", lambda: choose_drift(d, iss.y, REGRESSION_GROUPS, 1.0, cfg, folds)
     )
     stages: dict[str, dict[str, Any]] = {}
     for o in tqdm(d.outcomes, desc="outcomes"):
@@ -419,7 +454,7 @@ def _iss_extras(
     out["vehicle"] = score(anyone, pv, vw, vres)
     a, b = vehicle_recalibration(z, anyone, vw)
     boots = []
-    n_boot = cfg.boost_members if spec.kind == "boosted" else cfg.n_bootstrap
+    n_boot = cfg.boost_members if spec.kind in ("boosted", "blend") else cfg.n_bootstrap
     for ix in crash_resamples(vcrash, n_boot, cfg.seed + 9):
         boots.append(vehicle_recalibration(z[ix], anyone[ix], vw[ix]))
     out["vehicle_calibration"] = [a, b]
@@ -432,6 +467,27 @@ def kmh_to_mph_array(d: RiskData) -> FloatArray:
     """Delta-V of every row in mph (explicit conversion)."""
     kmh = d.rows["delta_v_kmh"].to_numpy(dtype=np.float64)
     return np.array([kmh_to_mph(v) for v in kmh])
+
+
+def _boosted_doc(f: BoostedFitted) -> dict[str, Any]:
+    return {
+        "kind": "boosted",
+        "trees": f.bag.to_document(ALL_COLUMNS_2),
+        "trees_per_member": f.n_trees,
+        "calibration": list(f.calibration),
+    }
+
+
+def _logistic_doc(f: Fitted, boot: tuple[FloatArray, FloatArray]) -> dict[str, Any]:
+    betas, cals = boot
+    return {
+        "kind": "logistic",
+        "columns": [ALL_COLUMNS_2[i] for i in f.columns],
+        "coefficients": f.beta.tolist(),
+        "calibration": list(f.calibration),
+        "bootstrap_coefficients": betas.tolist(),
+        "bootstrap_calibration": cals.tolist(),
+    }
 
 
 def _document(
@@ -449,27 +505,22 @@ def _document(
         st = stages[o.name]
         spec: Spec = st["spec"]
         f = fit_spec(d, o.y, np.arange(o.y.size), spec, cfg)
-        if isinstance(f, BoostedFitted):
+        if isinstance(f, BlendFitted):
             model: dict[str, Any] = {
-                "kind": "boosted",
-                "trees": f.bag.to_document(ALL_COLUMNS),
-                "trees_per_member": f.n_trees,
-                "calibration": list(f.calibration),
+                "kind": "blend",
+                "weight_boosted": f.weight,
+                "logistic": _logistic_doc(f.logistic, boot[o.name]),
+                "boosted": _boosted_doc(f.boosted),
             }
+        elif isinstance(f, BoostedFitted):
+            model = _boosted_doc(f)
         else:
-            betas, cals = boot[o.name]
-            model = {
-                "kind": "logistic",
-                "columns": [ALL_COLUMNS[i] for i in f.columns],
-                "coefficients": f.beta.tolist(),
-                "calibration": list(f.calibration),
-                "bootstrap_coefficients": betas.tolist(),
-                "bootstrap_calibration": cals.tolist(),
-            }
+            model = _logistic_doc(f, boot[o.name])
         outcomes_doc[o.name] = {
             "label": o.label,
             "ais_level": o.ais_level,
             "groups": list(spec.groups),
+            "tree_groups": list(spec.tree_groups),
             "penalty_c": spec.c,
             **model,
             "selection": _round(st["selection"]),
@@ -497,8 +548,8 @@ def _document(
         "model": {"name": MODEL_NAME, "version": MODEL_VERSION},
         "outcome": OUTCOME,
         "feature_code_sha256": feature_code_sha256(),
-        "candidate_columns": list(ALL_COLUMNS),
-        "imputation": asdict(d.imputation),
+        "candidate_columns": list(ALL_COLUMNS_2),
+        "imputation": asdict(d.imputation) | {"impact_count": d.impact_count_imputed},
         "data": {
             "file": OCCUPANTS_CSV.name,
             "sha256": _file_sha256(OCCUPANTS_CSV),

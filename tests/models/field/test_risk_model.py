@@ -16,13 +16,12 @@ import pandas as pd
 import pytest
 
 from models.field.risk_features import (
-    ALL_COLUMNS,
     AirbagCode,
     RiskInputs,
     SeatSide,
-    design_columns,
     rcs_basis,
 )
+from models.field.risk_impacts import ALL_COLUMNS_2, ImpactRiskInputs, design_columns_2
 from models.field.risk_model import (
     OUTCOME,
     REGION_NAMES,
@@ -61,7 +60,8 @@ def _driver(dv: float, **kw: object) -> RiskInputs:
 def test_the_shipped_artifact_loads_with_every_outcome(model: RiskModel) -> None:
     assert model.outcome == OUTCOME == "ISS15+"
     assert model.name == "field_iss15"
-    assert model.version == "3.1.0"
+    assert model.version == "3.2.0"
+    assert model.candidate_columns == ALL_COLUMNS_2
     assert set(model.regions) == set(REGION_NAMES)
     assert model.default_operating_point == "sens85"
     assert set(model.thresholds) == {"sens85", "acs_cot"}
@@ -215,7 +215,7 @@ def _as_inputs(rows: pd.DataFrame) -> list[RiskInputs]:
             return None if pd.isna(v) else float(v)
 
         out.append(
-            RiskInputs(
+            ImpactRiskInputs(
                 delta_v_kmh=float(r["delta_v_kmh"]),
                 pdof_deg=float(pdof[i]),
                 seat_row=int(r["seat_row"]),
@@ -231,6 +231,7 @@ def _as_inputs(rows: pd.DataFrame) -> list[RiskInputs]:
                 stature_cm=opt(r["stature_cm"]),
                 mass_kg=opt(r["mass_kg"]),
                 model_year=None if pd.isna(r["model_year"]) else int(r["model_year"]),
+                impact_count=int(r["n_events"]),
             )
         )
     return out
@@ -252,7 +253,7 @@ def test_the_served_probability_is_the_fits_prediction(model: RiskModel, data) -
     pick = rng.choice(len(data.rows), 300, replace=False)
     served = model.predict_many(_as_inputs(data.rows.iloc[pick]))
     x = data.x[pick].copy()
-    x[:, ALL_COLUMNS.index("accident_year")] = model.imputation.accident_year
+    x[:, ALL_COLUMNS_2.index("accident_year")] = model.imputation.accident_year
     refitted = 0
     for name in ("iss15", *(f"region_{r}" for r in REGION_NAMES)):
         om = model.decision if name == "iss15" else model.regions[name.removeprefix("region_")]
@@ -264,22 +265,33 @@ def test_the_served_probability_is_the_fits_prediction(model: RiskModel, data) -
         eta, _ = om.logits(x)
         assert np.allclose(got, 1.0 / (1.0 + np.exp(-eta)), rtol=1e-9, atol=1e-12), name
         od = doc["outcomes"][name]
-        if od["kind"] != "logistic" or refitted >= 2:
+        if od["kind"] == "boosted" or refitted >= 2:
             continue
         o = next(o for o in data.outcomes if o.name == name)
-        spec = Spec(tuple(od["groups"]), od["penalty_c"], doc["drift"]["chosen"])
+        spec = Spec(
+            tuple(od["groups"]),
+            od["penalty_c"],
+            doc["drift"]["chosen"],
+            tree_groups=tuple(od.get("tree_groups", ())),
+        )
+        # a blend's regression part refits as a regression (its bag: test_boosted.py)
         f = fit_spec(data, o.y, np.arange(o.y.size), spec, cfg)
-        assert np.allclose(f.beta, od["coefficients"], rtol=1e-6, atol=1e-9)  # type: ignore[union-attr]
-        assert np.allclose(got, f.probability(x), rtol=1e-7, atol=1e-10)
+        lr = od if od["kind"] == "logistic" else od["logistic"]
+        assert np.allclose(f.beta, lr["coefficients"], rtol=1e-6, atol=1e-9)  # type: ignore[union-attr]
+        if od["kind"] == "logistic":
+            assert np.allclose(got, f.probability(x), rtol=1e-7, atol=1e-10)
+        else:
+            part = om.logistic  # type: ignore[union-attr]
+            assert np.allclose(part.logits(x)[0], f.logit(x), rtol=1e-7, atol=1e-9)
         refitted += 1
     assert refitted >= 1
 
 
 def test_data_and_notification_paths_build_the_same_design(model: RiskModel, data) -> None:  # type: ignore[no-untyped-def]
     rows = data.rows.iloc[:500]
-    from_data = design_columns(risk_arrays(rows, model.imputation))  # type: ignore[arg-type]
+    from_data = design_columns_2(risk_arrays(rows, model.imputation))  # type: ignore[arg-type]
     from_inputs, _ = model.design(_as_inputs(rows))
-    year = ALL_COLUMNS.index("accident_year")
-    keep = [i for i in range(len(ALL_COLUMNS)) if i != year]
+    year = ALL_COLUMNS_2.index("accident_year")
+    keep = [i for i in range(len(ALL_COLUMNS_2)) if i != year]
     assert np.allclose(from_data[:, keep], from_inputs[:, keep])
     assert np.all(from_inputs[:, year] == model.imputation.accident_year)

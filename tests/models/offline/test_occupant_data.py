@@ -171,3 +171,18 @@ def test_the_fitted_population_is_named_and_counted(occupants: pd.DataFrame) -> 
     assert set(rows["belt"]) == {"belted", "none"}
     assert rows["iss"].notna().all()
     assert rows["delta_v_kmh"].notna().all()
+
+
+def test_impact_events_are_whole_counts_of_the_vehicle(occupants: pd.DataFrame) -> None:
+    """``n_events`` (feature set 2's impact count) counts a vehicle's harmful events:
+    whole numbers from 1, the same for every occupant of a vehicle, and more of them
+    go with more ISS 15+ (each further event is a further chance of injury)."""
+    n = occupants["n_events"]
+    assert n.notna().all()
+    assert (n == n.round()).all()
+    assert n.min() == 1
+    per_vehicle = occupants.groupby(["year", "psu", "caseno", "vehno"])["n_events"].nunique()
+    assert (per_vehicle == 1).all()
+    known = occupants[occupants["iss"].notna() & (occupants["age_years"] >= 16)]
+    rate = (known["iss"] >= ISS15_PLUS).groupby(known["n_events"].clip(1, 3)).mean()
+    assert rate.is_monotonic_increasing, rate

@@ -7,11 +7,13 @@ README block and the artifact agree: every figure they print is the artifact's.
 
 from __future__ import annotations
 
+import json
 from pathlib import Path
 
 import numpy as np
 import pytest
 
+from models.field.risk_impacts import ALL_COLUMNS_2
 from models.field.risk_model import REGION_NAMES, RiskModel
 from models.offline.field.risk_core import (
     crash_folds,
@@ -80,10 +82,12 @@ def test_a_reduced_fit_writes_an_artifact_card_and_readme_block_that_agree(
     model = RiskModel.from_document(doc)
     assert set(model.regions) == set(REGION_NAMES)
     kinds = {o["kind"] for o in doc["outcomes"].values()}
-    assert kinds <= {"logistic", "boosted"}
-    assert model.decision.n_bootstrap == (2 if doc["outcomes"]["iss15"]["kind"] == "boosted" else 3)
-    for o in doc["outcomes"].values():  # each kind was chosen on the lower held-out log loss
-        assert o["selection"]["kind_loss"][o["kind"]] == min(o["selection"]["kind_loss"].values())
+    assert kinds <= {"logistic", "boosted", "blend"}
+    with_trees = doc["outcomes"]["iss15"]["kind"] in ("boosted", "blend")
+    assert model.decision.n_bootstrap == (2 if with_trees else 3)
+    for o in doc["outcomes"].values():  # each kind was chosen on the lowest held-out log loss
+        key = o["kind"] if o["kind"] != "blend" else f"blend_{o['weight_boosted']:g}"
+        assert o["selection"]["kind_loss"][key] == min(o["selection"]["kind_loss"].values())
     # resumable: a second run reads every stage from the cache and gives the same document
     again = fit_risk(cfg, cache_dir=tmp_path / "cache")
     assert again.artifact == doc
@@ -107,3 +111,43 @@ def test_a_reduced_fit_writes_an_artifact_card_and_readme_block_that_agree(
     block = readme_block(doc, example)
     assert f"{iss['heldout']['auc']:.3f}" in block
     assert f"{iss['plain']['auc']:.3f}" in block
+
+
+def test_a_served_blend_is_the_fitted_blend_and_its_refits_share_the_bags_resamples() -> None:
+    """A blend (regression and bag, calibrated logits weighted) as the artifact stores it
+    answers as the fit predicts, and its interval's refits are the blend refitted on the
+    bag's resamples of crashes (refit j and member j see the same crashes)."""
+    from models.offline.field.risk_blend import BlendFitted
+    from models.offline.field.risk_fit import Spec, fit_spec
+    from models.offline.field.risk_run import _boosted_doc, _logistic_doc, blend_refits
+
+    cfg = RiskConfig(boost_members=3)
+    d = load_risk_data(subsample=0.05, seed=4)
+    y = d.outcomes[0].y
+    spec = Spec(("delta_v", "belt", "age"), 1.0, "none", "blend", 30, ("pdof_relative",), 0.5)
+    rows = np.arange(y.size)
+    f = fit_spec(d, y, rows, spec, cfg)
+    assert isinstance(f, BlendFitted)
+    boot = blend_refits(d, y, spec, cfg)
+    assert boot[0].shape == (3, len(f.logistic.columns))
+    od = {
+        "label": "ISS15+",
+        "ais_level": None,
+        "kind": "blend",
+        "weight_boosted": 0.5,
+        "logistic": _logistic_doc(f.logistic, boot),
+        "boosted": _boosted_doc(f.boosted),
+    }
+    od = json.loads(json.dumps(od))  # as written and read
+    served = RiskModel._outcome("iss15", od, ALL_COLUMNS_2)
+    eta, refits = served.logits(d.x)
+    assert np.allclose(eta, f.logit(d.x), rtol=1e-9, atol=1e-9)
+    assert refits.shape == (y.size, 3)
+    # refit j: the regression refitted on member j's crashes, blended with member j
+    ix = crash_resamples(d.crash, 3, cfg.seed)[1]
+    lr1 = fit_spec(d, y, ix.astype(np.int64), spec.part("logistic"), cfg)
+    member1 = f.boosted.member_logits(d.x)[:, 1]
+    assert np.allclose(refits[:, 1], 0.5 * lr1.logit(d.x) + 0.5 * member1, atol=1e-8)
+    # an artifact's blend weight outside (0, 1) is refused
+    with pytest.raises(ValueError, match="weight_boosted"):
+        RiskModel._outcome("iss15", {**od, "weight_boosted": 1.0}, ALL_COLUMNS_2)
