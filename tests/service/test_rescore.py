@@ -197,9 +197,9 @@ def test_cases_decided_by_2_0_0_are_rescored_with_the_iss15_model(
     monkeypatch: pytest.MonkeyPatch,
     capsys: pytest.CaptureFixture[str],
 ) -> None:
-    """`cases rescore --model 3.0.0` on cases decided by 2.0.0 (P(MAIS 3+)): every case is
-    run again with the ISS 15+ model, the CSV lists old and new model, probability and
-    decision, and the stored records are untouched."""
+    """`cases rescore --model <shipped version>` on cases decided by 2.0.0 (P(MAIS 3+)): every
+    case is run again with the shipped ISS 15+ model, the CSV lists old and new model,
+    probability and decision, and the stored records are untouched."""
     answered = _submit_cases(mais3_api)
     assert all(a["triage"]["model"] == f"field_mais3@{MAIS3}" for a in answered.values())
     assert all(a["triage"]["outcome"] == "MAIS3+" for a in answered.values())

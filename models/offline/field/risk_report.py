@@ -280,8 +280,9 @@ def _selection(doc: dict[str, Any]) -> list[str]:
         "Then the kind: the regression on the kept groups against a bag of "
         f"{cfg_members(doc)} boosted-tree models on the same inputs (trees of depth 3, the number "
         "of trees per member chosen by one member's cross-validated log loss; then, by the same "
-        "member's log loss, whether the trees also get the tree-only inputs of feature set 2, the "
-        "PDOF seen from the occupant's side and the impact count), and blends of the two "
+        "member's log loss, whether the trees also get feature set 2's inputs, the PDOF seen from "
+        "the occupant's side and the impact count where the regression dropped it), and blends "
+        "of the two "
         "(calibrated logits weighted `1 - w` and `w`), by the same held-out log loss of the "
         "calibrated probability:",
         "",
