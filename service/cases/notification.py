@@ -329,8 +329,9 @@ class CrashIn(WireModel):
         ge=1,
         le=50,
         description="Impact (harmful) events the vehicle counted, where it counts them (the "
-        "field risk models use it). Omitted: one for a single impact; for multiple impacts "
-        "their data's median (reported as `impact_count_imputed`).",
+        "field risk models use it, up to 6: their data's range). Omitted: one for a single "
+        "impact; for multiple impacts their data's median (reported as "
+        "`impact_count_imputed`).",
         examples=[2],
     )
     rollover: bool = Field(default=False, description="The vehicle rolled over.")
