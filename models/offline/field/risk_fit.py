@@ -16,7 +16,8 @@ in the vehicle ISS 15+):
    age and delta-V slopes by crash mode and belt, or, where cross-validation
    prefers it, a bag of boosted trees on the same inputs (:mod:`.risk_boosted`),
    plus feature set 2's tree-only groups where one member's cross-validated
-   log loss says they help (the ranking fit, unweighted),
+   log loss says they help, or a blend of the two (:mod:`.risk_blend`) (the
+   ranking fit, unweighted),
    then ``logit P = a + b eta`` fitted with the national weights ``ratwgt``
    (the probability means "of such occupants in US towaway crashes"). The
    penalty is chosen by cross-validated log loss; each input group is kept only
