@@ -3,12 +3,13 @@
 Fitted offline on NASS-CDS 1997-2014 (:mod:`models.offline.field.risk_fit`,
 ``aacn-triage fit-field``; model card ``docs/field/MODEL_CARD.md``), served
 with numpy (the trees walked by one compiled loop). One artifact holds several
-outcome models, each of one of two kinds (``kind``, chosen per outcome by
+outcome models, each of one of three kinds (``kind``, chosen per outcome by
 cross-validation; an artifact without ``kind``, 3.0.0, holds regressions)::
 
     eta = x' beta                  (logistic: ranking fit, x: design columns kept)
     eta = mean_j s_j(x)            (boosted: a bag of boosted trees, models.field.boosted)
     logit P = a + b eta            (recalibration with the national weights)
+    logit P = (1 - w) logit_logistic + w logit_boosted      (blend, since 3.2.0)
 
 for ``iss15`` (the decision) and ``region_<region>`` (AIS 3+ in each body
 region, AIS 2+ where the artifact says so), plus the vehicle answer::
@@ -23,8 +24,9 @@ the artifact (a bag's members for the boosted kind), ``expit(eta -/+ z sd)``
 around the point estimate.
 
 The artifact carries the checksum of its content and of the code that builds
-its features (:mod:`models.field.risk_features`); a tampered or stale artifact
-is refused at load.
+its features (its feature set's: :mod:`models.field.risk_features`, and
+:mod:`models.field.risk_impacts` since 3.2.0); a tampered or stale artifact is
+refused at load.
 """
 
 from __future__ import annotations
@@ -58,6 +60,7 @@ from models.field.risk_features import (
 from models.field.risk_impacts import (
     ALL_COLUMNS_2,
     FEATURE_SET_SOURCES,
+    IMPACT_COUNT_CLAMP,
     design_columns_2,
     inputs_arrays_2,
 )
@@ -398,9 +401,9 @@ class RiskModel:
     Attributes
     ----------
     name, version, sha256, outcome : str
-    decision : OutcomeModel or BoostedOutcomeModel
+    decision : AnyOutcomeModel
         ISS 15+.
-    regions : Mapping[str, OutcomeModel or BoostedOutcomeModel]
+    regions : Mapping[str, AnyOutcomeModel]
     vehicle_calibration : ndarray, shape (2,)
     vehicle_bootstrap_calibration : ndarray, shape (B, 2)
     imputation : RiskImputation
@@ -543,8 +546,9 @@ class RiskModel:
         )
         # feature set 2: the count imputed for multiple impacts of unknown count
         count = float(_get(imp, "impact_count")) if cand == ALL_COLUMNS_2 else None
-        if count is not None and not 2.0 <= count <= 50.0:
-            raise ArtifactError("`imputation.impact_count` must be in [2, 50]")
+        top = IMPACT_COUNT_CLAMP[1]  # a count of multiple impacts, within the served clamp
+        if count is not None and not 2.0 <= count <= top:
+            raise ArtifactError(f"`imputation.impact_count` must be in [2, {top:g}]")
         points = _get(doc, "operating_points")
         thresholds = {str(n): float(_get(op, "threshold")) for n, op in points.items()}
         if not all(0.0 < t < 1.0 for t in thresholds.values()):

@@ -209,7 +209,7 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         },
         "triage_code": {
             "version": "0.2.0",
-            "sha256": "6bf8356be5ff889e17ce336c57f742ae3a4f1aeee537c41bc20e2bbc4aee64d5",
+            "sha256": "176c3d0d4fbfb85c0a6921e78fbb9d57051f3f861c94c4ce93f1bc58bde1321f",
         },
         "risk_calibration": {
             "version": "1",

@@ -403,7 +403,8 @@ def select_spec(
     dict
         ``c_loss`` (penalty -> CV log loss), ``drop_loss`` (group -> CV log loss
         rise when dropped; negative: dropped), ``full_loss``, and
-        :func:`choose_kind`'s ``tree_loss``, ``kind_loss``, ``kind``.
+        :func:`choose_kind`'s entries (``tree_loss``, ``tree_groups_loss``,
+        ``kind_loss``, ``kind``, ``blend_weight``).
     ndarray, shape (n,)
         Held-out (out-of-fold) calibrated probability of the chosen spec.
     """

@@ -62,7 +62,8 @@ MODEL_NAME: Final[str] = "field_iss15"
 #: held-out figures and the drift treatment scored as served (no accident-year
 #: term chosen); the default point's margin over the positives the check counts.
 #: 3.2.0 (2026-12-06): feature set 2 (:mod:`models.field.risk_impacts`): the
-#: trees may split on the PDOF seen from the occupant's side and the impact count.
+#: trees may split on the PDOF seen from the occupant's side and the impact count,
+#: the regression may keep the count; a third kind, a blend of the two.
 MODEL_VERSION: Final[str] = "3.2.0"
 
 #: Groups of the plain regression: linear main effects of every notification
