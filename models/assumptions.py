@@ -36,6 +36,11 @@ class AssumptionCode(StrEnum):
     QUARTER_TURNS_IMPUTED = "quarter_turns_imputed"
     IMPACT_COUNT_IMPUTED = "impact_count_imputed"
     OUTSIDE_FIELD_POPULATION = "outside_field_population"
+    INPUTS_INTEGRATED = "inputs_integrated"
+    DELTA_V_MEASURED = "delta_v_measured"
+    DELTA_V_READ_AS_RECONSTRUCTED = "delta_v_read_as_reconstructed"
+    BELT_UNKNOWN = "belt_unknown"
+    CHILD_WITHOUT_OCCUPANT_MODEL = "child_without_occupant_model"
     OUTSIDE_OCCUPANT_MODEL_COVERAGE = "outside_occupant_model_coverage"
     OCCUPANT_MODEL_FAILED = "occupant_model_failed"
     POSTURE_NOT_SENSED = "posture_not_sensed"
@@ -121,6 +126,35 @@ DESCRIPTIONS: Final[dict[AssumptionCode, str]] = {
         "An occupant outside the field risk models' data (under 16 years): the probability "
         "is that of a 16-year-old and is extrapolated."
     ),
+    AssumptionCode.INPUTS_INTEGRATED: (
+        "Some occupant inputs (age, sex, stature, mass, belt use) were unknown: the decided "
+        "probability is the average over such occupants of the same seat (and whatever else "
+        "is known) in the field data, not the probability at their medians. "
+        "`unknown_inputs_range95` gives the spread over them; `probability_ci95` stays the "
+        "confidence interval of the average. Send the inputs when known."
+    ),
+    AssumptionCode.DELTA_V_MEASURED: (
+        "The delta-V was measured by the vehicle (EDR or telematics; a summary says so by "
+        "default): the field risk models learned the reconstructed delta-V of NASS-CDS, which "
+        "reads lower, so the probability is the average over the reconstructed delta-V that "
+        "the measurement model (models/field/measurement.py) allows for it. Send "
+        "`delta_v_source: reconstructed` for a reconstruction."
+    ),
+    AssumptionCode.DELTA_V_READ_AS_RECONSTRUCTED: (
+        "The delta-V was measured by the vehicle but the field model deciding has no "
+        "measurement model (a model before 3.4.0): it read the measured value as if "
+        "reconstructed, so its probability errs high."
+    ),
+    AssumptionCode.BELT_UNKNOWN: (
+        "Belt use unknown (not monitored): the field risk model integrates over belt use at "
+        "this seat; the occupant models, which need a state, take unbelted (the conservative "
+        "choice)."
+    ),
+    AssumptionCode.CHILD_WITHOUT_OCCUPANT_MODEL: (
+        "A child (under 16 years, or in a child seat): the occupant models are adult dummies, "
+        "so no occupant-model explanation is given; the field risk model, fitted on children "
+        "too, decides."
+    ),
     AssumptionCode.OUTSIDE_OCCUPANT_MODEL_COVERAGE: (
         "The PDOF lies between the occupant models' ranges: the field model decides without "
         "an occupant-model explanation."
@@ -182,8 +216,8 @@ DESCRIPTIONS: Final[dict[AssumptionCode, str]] = {
         "count as multiple impacts."
     ),
     AssumptionCode.VEDS_BELT_NOT_REPORTED: (
-        "VEDS: belt not reported, or not monitored, for an occupied seat: unbelted assumed (the "
-        "conservative choice)."
+        "VEDS: belt not reported, or not monitored, for an occupied seat: belt use unknown "
+        "(the field risk model integrates over it; the occupant models take unbelted)."
     ),
     AssumptionCode.VEDS_AIRBAG_BY_CATEGORY: (
         "VEDS: airbags name no seat: the state every reported airbag of a category shares was "

@@ -20,6 +20,7 @@ __all__ = [
     "AccelerationPulse",
     "AirbagState",
     "Body",
+    "ChildRestraint",
     "CrashNotification",
     "DeltaVPulse",
     "DriveSide",
@@ -131,6 +132,32 @@ class Sex(StrEnum):
     FEMALE = "female"
 
 
+class ChildRestraint(StrEnum):
+    """How a child is restrained, as the wire says it.
+
+    The field data know only "child seat" (NASS-CDS codes every child
+    restraint alike), so the field risk models take the four seat kinds alike;
+    the kind is kept for the record and the EMS handover (NEMSIS eInjury.07).
+    """
+
+    REAR_FACING_SEAT = "rear_facing_seat"
+    FORWARD_FACING_SEAT = "forward_facing_seat"
+    BOOSTER = "booster"
+    CHILD_SEAT_UNKNOWN_KIND = "child_seat_unknown_kind"
+    LAP_SHOULDER_BELT = "lap_shoulder_belt"
+    NONE = "none"
+
+    @property
+    def child_seat(self) -> bool:
+        """A child seat of some kind (booster included)."""
+        return self in (
+            ChildRestraint.REAR_FACING_SEAT,
+            ChildRestraint.FORWARD_FACING_SEAT,
+            ChildRestraint.BOOSTER,
+            ChildRestraint.CHILD_SEAT_UNKNOWN_KIND,
+        )
+
+
 class AirbagState(StrEnum):
     """State of an airbag at the occupant's seat (frontal, or side and curtain)."""
 
@@ -215,11 +242,21 @@ class SummaryPulse:
         Principal direction of force, deg clockwise from straight ahead.
     duration_ms : float or None
         Pulse duration, ms; None lets the engine choose from delta-V.
+    delta_v_source : str
+        ``measured`` (the vehicle's EDR or telematics unit: what a telematics
+        unit sends, the default) or ``reconstructed`` (from crush, as the field
+        data's; :mod:`models.field.measurement`).
+    delta_v_axes : str
+        ``resultant`` (the default) or ``longitudinal`` (49 CFR 563 requires
+        only the longitudinal record): a longitudinal value is read as the
+        resultant along the PDOF (:func:`models.pulse.process_pulse`).
     """
 
     delta_v_kmh: float
     pdof_deg: float
     duration_ms: float | None = None
+    delta_v_source: str = "measured"
+    delta_v_axes: str = "resultant"
     kind: str = field(default="summary", init=False)
 
 
@@ -263,6 +300,14 @@ class Occupant:
     stature_cm, mass_kg : float or None
         Occupant stature (cm) and mass (kg) where known (the field risk model
         may use them; the occupant models use `body`).
+    belt_known : bool
+        False: belt use unknown (an unmonitored belt); the field risk model
+        integrates over belt use by seat, the occupant models take `belted`
+        (False, the conservative choice).
+    child_restraint : ChildRestraint or None
+        How a child is restrained where said (a child seat counts as restrained).
+    child_restraint_unsecured : bool or None
+        The child seat or belt was not secured, where said (a car cannot sense it).
     """
 
     seat: Seat
@@ -282,6 +327,16 @@ class Occupant:
     seat_track_source: SeatTrackSource = SeatTrackSource.SENSOR
     stature_cm: float | None = None
     mass_kg: float | None = None
+    belt_known: bool = True
+    child_restraint: ChildRestraint | None = None
+    child_restraint_unsecured: bool | None = None
+
+    @property
+    def child(self) -> bool:
+        """A child: age known under 16, or restrained in a child seat."""
+        if self.age_years is not None:
+            return self.age_years < 16.0
+        return self.child_restraint is not None and self.child_restraint.child_seat
 
 
 @dataclass(frozen=True)

@@ -719,6 +719,35 @@ def _process_delta_v(pulse: DeltaVPulse, rate_hz: float) -> ProcessedPulse:
     return _summarise("longitudinal_kmh", t, ax, ay, dvx, dvy, rate_hz)
 
 
+#: Largest angle between the PDOF and the vehicle's long axis at which a
+#: longitudinal-only delta-V is read as the resultant, deg. [R] Beyond 60 deg the
+#: longitudinal component is under half the resultant and its 10 % tolerance
+#: (49 CFR 563 Table III) doubles or more in the resultant: send the resultant.
+MAX_LONGITUDINAL_READING_ANGLE_DEG: Final[float] = 60.0
+
+
+def resultant_from_longitudinal_kmh(longitudinal_kmh: float, pdof_deg: float) -> float:
+    """The resultant delta-V whose longitudinal component along the PDOF is `longitudinal_kmh`.
+
+    ``resultant = |longitudinal| / |cos(PDOF)|`` (the longitudinal component of a
+    delta-V along the PDOF).
+
+    Raises
+    ------
+    PulseError
+        The PDOF lies more than :data:`MAX_LONGITUDINAL_READING_ANGLE_DEG` from
+        the long axis (a side impact: the longitudinal record does not carry it).
+    """
+    c = abs(math.cos(math.radians(pdof_deg)))
+    if c < math.cos(math.radians(MAX_LONGITUDINAL_READING_ANGLE_DEG)):
+        raise PulseError(
+            f"`delta_v_axes` longitudinal: a longitudinal delta-V cannot be read as the resultant "
+            f"at PDOF {pdof_deg:g} deg (more than {MAX_LONGITUDINAL_READING_ANGLE_DEG:g} deg from "
+            "the vehicle's long axis): send the resultant."
+        )
+    return abs(longitudinal_kmh) / c
+
+
 def _process_summary(pulse: SummaryPulse, rate_hz: float) -> ProcessedPulse:
     dv = _number("delta_v_kmh", pulse.delta_v_kmh)
     if dv <= 0.0:
@@ -726,6 +755,9 @@ def _process_summary(pulse: SummaryPulse, rate_hz: float) -> ProcessedPulse:
     _check_delta_v("delta_v_kmh", dv)
     pdof = _number("pdof_deg", pulse.pdof_deg) % 360.0
     pdof = 0.0 if pdof >= 360.0 else pdof
+    if pulse.delta_v_axes == "longitudinal":
+        dv = resultant_from_longitudinal_kmh(dv, pdof)
+        _check_delta_v("delta_v_kmh", dv)
     if pulse.duration_ms is None:
         dur_ms = DEFAULT_HAVERSINE_DURATION_MS
     else:

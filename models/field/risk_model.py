@@ -34,21 +34,38 @@ from __future__ import annotations
 import hashlib
 import json
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 from functools import cached_property, lru_cache
 from pathlib import Path
 from typing import Any, Final
 
 import numpy as np
 
-from models.arrays import FloatArray
+from models.arrays import FloatArray, IntArray
 from models.codehash import source_tree_sha256
 from models.constants import Z_95
 from models.field.boosted import Forest, TreeBag
+from models.field.measurement import (
+    MEASUREMENT_MODEL,
+    DeltaVSource,
+    MeasurementModel,
+    delta_v_source_of,
+    over_reconstructed_nodes,
+)
 from models.field.model import (  # one artifact check for both kinds
     ArtifactError,
     canonical_content_sha256,
     verified_document,
+)
+from models.field.risk_children import (
+    ALL_COLUMNS_3,
+    CHILD_MAX_AGE_YEARS,
+    FEATURE_SET_SOURCES_3,
+    ChildRiskInputs,
+    Restraint,
+    design_columns_3,
+    inputs_arrays_3,
+    restraint_of,
 )
 from models.field.risk_features import (
     ALL_COLUMNS,
@@ -58,12 +75,11 @@ from models.field.risk_features import (
     inputs_arrays,
 )
 from models.field.risk_impacts import (
-    ALL_COLUMNS_2,
-    FEATURE_SET_SOURCES,
     IMPACT_COUNT_CLAMP,
     design_columns_2,
     inputs_arrays_2,
 )
+from models.field.unknowns import DonorTable, pick_donors, seat_group, substitute
 
 __all__ = [
     "ARTIFACT_SCHEMA",
@@ -115,16 +131,23 @@ _INPUT_COLUMNS: Final[Mapping[str, tuple[str, ...]]] = {
 
 _ARTIFACT_FILE: Final[str] = "field_iss15.json"
 
+#: What was known of an occupant, for the threshold (feature set 3): the
+#: operating points keep their promise for each (:meth:`RiskModel.threshold`).
+KNOWLEDGE: Final[tuple[str, ...]] = ("adult", "child", "age_unknown")
+
+#: The same with a measured delta-V (artifacts with a measurement model, 3.4.0 on).
+KNOWLEDGE_MEASURED: Final[tuple[str, ...]] = tuple(f"{k}_measured" for k in KNOWLEDGE)
+
 
 @lru_cache(maxsize=4)
-def feature_code_sha256(columns: tuple[str, ...] = ALL_COLUMNS_2) -> str:
+def feature_code_sha256(columns: tuple[str, ...] = ALL_COLUMNS_3) -> str:
     """Checksum of the normalised code that builds the features of a feature set.
 
     Parameters
     ----------
     columns : tuple of str, optional
         The set's candidate columns (default: the newest set,
-        :data:`models.field.risk_impacts.ALL_COLUMNS_2`).
+        :data:`models.field.risk_children.ALL_COLUMNS_3`).
 
     Raises
     ------
@@ -132,13 +155,13 @@ def feature_code_sha256(columns: tuple[str, ...] = ALL_COLUMNS_2) -> str:
         Columns of no known feature set.
     """
     root = Path(__file__).resolve().parents[1]
-    return source_tree_sha256([root / rel for rel in FEATURE_SET_SOURCES[columns]])
+    return source_tree_sha256([root / rel for rel in FEATURE_SET_SOURCES_3[columns]])
 
 
 def _artifact_feature_sha256(doc: dict[str, Any]) -> str:
     """The feature code checksum an artifact's own feature set must match."""
     columns = tuple(_get(doc, "candidate_columns"))
-    if columns not in FEATURE_SET_SOURCES:
+    if columns not in FEATURE_SET_SOURCES_3:
         raise ArtifactError("`candidate_columns` are of no known feature set")
     return feature_code_sha256(columns)
 
@@ -357,6 +380,16 @@ class RiskPrediction:
         Every region of :data:`REGION_NAMES`.
     bootstrap_probability : ndarray, shape (B,)
         P(ISS 15+) of each bootstrap refit (for the vehicle answer's interval).
+    integrated : tuple of str
+        Inputs that were unknown and integrated over (feature set 3:
+        :mod:`models.field.unknowns`); empty when every input was known.
+    unknown_inputs_range95 : (float, float) or None
+        The spread of P(ISS 15+) over the unknown inputs: the 2.5 and 97.5
+        percentiles over the donors averaged (None when nothing was
+        integrated). Not a confidence interval: ``ci95`` is the probability's.
+    knowledge : str
+        What was known, for the threshold: ``adult`` (age known, 16+),
+        ``child`` (age known, under 16) or ``age_unknown``.
     """
 
     probability: float
@@ -368,6 +401,9 @@ class RiskPrediction:
     extrapolated: bool
     regions: Mapping[str, RegionRisk]
     bootstrap_probability: FloatArray
+    integrated: tuple[str, ...] = ()
+    unknown_inputs_range95: tuple[float, float] | None = None
+    knowledge: str = "adult"
 
 
 @dataclass(frozen=True)
@@ -376,6 +412,55 @@ class VehicleRisk:
 
     probability: float
     ci95: tuple[float, float]
+
+
+def knowledge_of(inputs: RiskInputs, measured: bool = False) -> str:
+    """What was known of an occupant, for the threshold (:data:`KNOWLEDGE`): ``adult``,
+    ``child`` or ``age_unknown``, with ``_measured`` where its delta-V was measured and
+    read through the measurement model."""
+    if inputs.age_years is None:
+        base = "age_unknown"
+    else:
+        base = "child" if inputs.age_years < CHILD_MAX_AGE_YEARS else "adult"
+    return f"{base}_measured" if measured else base
+
+
+def _logit(p: FloatArray) -> FloatArray:
+    q = np.clip(p, 1e-15, 1.0 - 1e-15)
+    out: FloatArray = np.log(q) - np.log1p(-q)
+    return out
+
+
+def _integrated(
+    logits: Sequence[tuple[FloatArray, FloatArray]], owner: IntArray, weight: FloatArray, n: int
+) -> tuple[FloatArray, FloatArray, FloatArray, list[tuple[float, float] | None]]:
+    """Weighted means over each occupant's rows: calibrated logit (k, n), refits' logit sd
+    (k, n), P(ISS 15+) of each refit (n, B), and the spread over the rows of P(ISS 15+)
+    (weighted 2.5 and 97.5 percentiles; None for an occupant of one row)."""
+    etas, sds = [], []
+    boot_first: FloatArray = np.empty((0, 0))
+    for k, (e, b) in enumerate(logits):
+        pm = np.zeros(n)
+        np.add.at(pm, owner, weight * _expit(e))
+        pb = np.zeros((n, b.shape[1]))
+        np.add.at(pb, owner, weight[:, None] * _expit(b))
+        etas.append(_logit(pm))
+        sds.append(np.std(_logit(pb), axis=1, ddof=1))
+        if k == 0:
+            boot_first = pb
+    p0 = _expit(logits[0][0])
+    spread: list[tuple[float, float] | None] = []
+    for i in range(n):
+        rows = owner == i
+        if rows.sum() == 1:
+            spread.append(None)
+            continue
+        order = np.argsort(p0[rows], kind="stable")
+        values, cum = p0[rows][order], np.cumsum(weight[rows][order])
+        lo = values[min(int(np.searchsorted(cum, 0.025 * cum[-1])), values.size - 1)]
+        hi = values[min(int(np.searchsorted(cum, 0.975 * cum[-1])), values.size - 1)]
+        spread.append((float(lo), float(hi)))
+    return np.stack(etas), np.stack(sds), boot_first, spread
 
 
 def _modes(x_all: FloatArray, inputs: Sequence[RiskInputs]) -> list[str]:
@@ -416,8 +501,20 @@ class RiskModel:
     candidate_columns : tuple of str
         The feature set's design columns (the outcome models index them).
     impact_count_imputed : float or None
-        Feature set 2: the impact count taken for multiple impacts of unknown
-        count (None: feature set 1, no count).
+        Feature sets 2 and 3: the impact count taken for multiple impacts of
+        unknown count (None: feature set 1, no count).
+    donors : DonorTable or None
+        Feature set 3: the fitted population's donors that unknown inputs are
+        integrated over (None: older sets impute medians).
+    knowledge_thresholds : Mapping[str, Mapping[str, float]]
+        Feature set 3: per operating point, the threshold by what was known
+        (``adult``, ``child``, ``age_unknown``, and each ``_measured`` where
+        the artifact has a measurement model); empty for older artifacts,
+        whose one threshold applies to every occupant.
+    measurement : MeasurementModel or None
+        The delta-V measurement model a measured delta-V is read through
+        (:mod:`models.field.measurement`; 3.4.0 on). None: every delta-V is
+        taken as reconstructed, as the data's (older artifacts).
     """
 
     name: str
@@ -436,6 +533,9 @@ class RiskModel:
     document: Mapping[str, Any]
     candidate_columns: tuple[str, ...] = ALL_COLUMNS
     impact_count_imputed: float | None = None
+    donors: DonorTable | None = None
+    knowledge_thresholds: Mapping[str, Mapping[str, float]] = field(default_factory=dict)
+    measurement: MeasurementModel | None = None
 
     @classmethod
     def from_artifact(cls, path: str | Path) -> RiskModel:
@@ -545,7 +645,7 @@ class RiskModel:
             **{k: float(_get(imp, k)) for k in RiskImputation.__dataclass_fields__}
         )
         # feature set 2: the count imputed for multiple impacts of unknown count
-        count = float(_get(imp, "impact_count")) if cand == ALL_COLUMNS_2 else None
+        count = float(_get(imp, "impact_count")) if cand != ALL_COLUMNS else None
         top = IMPACT_COUNT_CLAMP[1]  # a count of multiple impacts, within the served clamp
         if count is not None and not 2.0 <= count <= top:
             raise ArtifactError(f"`imputation.impact_count` must be in [2, {top:g}]")
@@ -556,6 +656,27 @@ class RiskModel:
         default = _get(doc, "default_operating_point")
         if default not in thresholds:
             raise ArtifactError(f"default operating point {default!r} is not defined")
+        donors, by_knowledge = None, {}
+        measurement = None
+        if "measurement_model" in doc:
+            mm = _get(doc, "measurement_model")
+            measurement = MeasurementModel(str(_get(mm, "name")), str(_get(mm, "version")))
+            if measurement != MEASUREMENT_MODEL:
+                raise ArtifactError(
+                    f"measurement model {measurement.label} is not the served "
+                    f"{MEASUREMENT_MODEL.label} (stale artifact)"
+                )
+        if cand == ALL_COLUMNS_3:
+            try:
+                donors = DonorTable.from_document(_get(_get(doc, "unknowns"), "donors"))
+            except ValueError as exc:
+                raise ArtifactError(str(exc)) from None
+            for n, op in points.items():
+                table = {str(k): float(v) for k, v in _get(op, "thresholds_by_knowledge").items()}
+                keys = set(KNOWLEDGE) | (set(KNOWLEDGE_MEASURED) if measurement else set())
+                if set(table) != keys or not all(0 < t < 1 for t in table.values()):
+                    raise ArtifactError(f"operating point {n!r}: thresholds by knowledge malformed")
+                by_knowledge[str(n)] = table
         model = _get(doc, "model")
         return cls(
             name=str(_get(model, "name")),
@@ -576,6 +697,9 @@ class RiskModel:
             document=doc,
             candidate_columns=cand,
             impact_count_imputed=count,
+            donors=donors,
+            knowledge_thresholds=by_knowledge,
+            measurement=measurement,
         )
 
     def design(
@@ -585,13 +709,93 @@ class RiskModel:
 
         ``K`` is the artifact's feature set's: feature set 2
         (:mod:`models.field.risk_impacts`) reads the impact count of
-        :class:`~models.field.risk_impacts.ImpactRiskInputs`.
+        :class:`~models.field.risk_impacts.ImpactRiskInputs`; feature set 3
+        needs every occupant input known (:meth:`expanded_design` integrates).
         """
+        if self.donors is not None:
+            assert self.impact_count_imputed is not None
+            arrays, imputed = inputs_arrays_3(inputs, self.imputation, self.impact_count_imputed)
+            return design_columns_3(arrays), imputed
         if self.impact_count_imputed is not None:
             arrays, imputed = inputs_arrays_2(inputs, self.imputation, self.impact_count_imputed)
             return design_columns_2(arrays), imputed
         arrays, imputed = inputs_arrays(inputs, self.imputation)
         return design_columns(arrays), imputed
+
+    def expanded_design(
+        self, inputs: Sequence[RiskInputs]
+    ) -> tuple[
+        FloatArray, IntArray, FloatArray, tuple[tuple[str, ...], ...], tuple[tuple[str, ...], ...]
+    ]:
+        """Design rows with each occupant's unknown inputs expanded over its donors, and
+        a measured delta-V over the reconstructions it allows.
+
+        Returns
+        -------
+        x : ndarray, shape (N, K)
+        owner : ndarray of int, shape (N,)
+            The occupant of each row (an occupant with every input known and a
+            reconstructed delta-V has one).
+        weight : ndarray, shape (N,)
+            Each row's weight within its occupant (summing to 1).
+        imputed : tuple of tuple of str
+            Per occupant, the vehicle inputs imputed (quarter turns, model year,
+            impact count).
+        integrated : tuple of tuple of str
+            Per occupant, the inputs integrated over (``delta_v_kmh``: a measured
+            delta-V read through the measurement model).
+        """
+        if self.donors is None:
+            x, imputed = self.design(inputs)
+            n = len(inputs)
+            return x, np.arange(n), np.ones(n), imputed, tuple(() for _ in inputs)
+        placeholder, blocks, integrated = [], [], []
+        measured: dict[int, float] = {}
+        for i, f in enumerate(inputs):
+            restraint = restraint_of(f)
+            unknown = tuple(
+                name
+                for name, value in (
+                    ("age_years", f.age_years),
+                    ("female", f.female),
+                    ("stature_cm", f.stature_cm),
+                    ("mass_kg", f.mass_kg),
+                    ("restraint", restraint),
+                )
+                if value is None
+            )
+            placeholder.append(
+                replace(f, restraint=Restraint.BELTED)
+                if isinstance(f, ChildRiskInputs) and restraint is None
+                else f
+            )
+            donors = None
+            if unknown:
+                donors = pick_donors(
+                    self.donors,
+                    seat_group(f.seat_row, f.seat_side.value, f.driver),
+                    age_years=f.age_years,
+                    female=None if f.female is None else float(f.female),
+                    restraint=None if restraint is None else restraint.value,
+                )
+            blocks.append((i, donors, unknown))
+            if self.measurement is not None and delta_v_source_of(f) is DeltaVSource.MEASURED:
+                measured[i] = float(f.delta_v_kmh)
+                unknown = (*unknown, "delta_v_kmh")
+            integrated.append(unknown)
+        assert self.impact_count_imputed is not None
+        arrays, imputed = inputs_arrays_3(placeholder, self.imputation, self.impact_count_imputed)
+        expanded, owner = substitute(arrays, blocks, self.donors)
+        counts = np.bincount(owner, minlength=len(inputs)).astype(np.float64)
+        weight = 1.0 / counts[owner]
+        if measured:
+            expanded, owner, weight = over_reconstructed_nodes(expanded, owner, weight, measured)
+        # medians stood in for the unknown inputs only as placeholders
+        named = tuple(
+            tuple(k for k in imp if k not in unknown)
+            for imp, unknown in zip(imputed, integrated, strict=True)
+        )
+        return design_columns_3(expanded), owner, weight, named, tuple(integrated)
 
     @cached_property
     def used_inputs(self) -> frozenset[str]:
@@ -603,6 +807,12 @@ class RiskModel:
     def predict_many(self, inputs: Sequence[RiskInputs]) -> list[RiskPrediction]:
         """Every occupant's answer (vectorised over occupants).
 
+        An occupant with unknown inputs (feature set 3) gets the mean
+        probability over its donors (:mod:`models.field.unknowns`): each
+        bootstrap refit's mean likewise, so ``ci95`` is the confidence interval
+        of the integrated probability (the spread of its refits' logits), and
+        the donors' own spread is ``unknown_inputs_range95``.
+
         Raises
         ------
         ValueError
@@ -610,20 +820,26 @@ class RiskModel:
         """
         if not inputs:
             return []
-        x, imputed = self.design(inputs)
+        x, owner, weight, imputed, integrated = self.expanded_design(inputs)
         used = self.used_inputs
         names = ("iss15", *self.regions)
         models = (self.decision, *self.regions.values())
         logits = self._logits(models, x)
-        eta = np.stack([e for e, _ in logits])  # (1 + regions, n)
-        sd = np.stack([np.std(b, axis=1, ddof=1) for _, b in logits])
+        n = len(inputs)
+        if x.shape[0] == n:  # every input known: the rows are the occupants
+            eta = np.stack([e for e, _ in logits])  # (1 + regions, n)
+            sd = np.stack([np.std(b, axis=1, ddof=1) for _, b in logits])
+            boot_p = _expit(logits[0][1])
+            spread: list[tuple[float, float] | None] = [None] * n
+        else:
+            eta, sd, boot_p, spread = _integrated(logits, owner, weight, n)
         p = _expit(eta)
         lo = np.minimum(_expit(eta - Z_95 * sd), p).tolist()
         hi = np.maximum(_expit(eta + Z_95 * sd), p).tolist()
         pl, etal, sdl = p.tolist(), eta.tolist(), sd.tolist()
-        boot_p = _expit(logits[0][1])
         levels = [3 if m.ais_level is None else m.ais_level for m in models]
-        modes = _modes(x, inputs)
+        first = np.searchsorted(owner, np.arange(n))
+        modes = _modes(x[first], inputs)
         out = []
         for i, f in enumerate(inputs):
             regions = {
@@ -641,6 +857,9 @@ class RiskModel:
                     extrapolated=f.delta_v_kmh > self.delta_v_max_kmh,
                     regions=regions,
                     bootstrap_probability=boot_p[i],
+                    integrated=integrated[i],
+                    unknown_inputs_range95=spread[i],
+                    knowledge=knowledge_of(f, "delta_v_kmh" in integrated[i]),
                 )
             )
         return out
@@ -719,15 +938,27 @@ class RiskModel:
         """Operating point name -> threshold (the names the service may configure)."""
         return self.thresholds
 
-    def threshold(self, operating_point: str | None = None) -> float:
+    def threshold(self, operating_point: str | None = None, knowledge: str | None = None) -> float:
         """Decision threshold on P(ISS 15+) (default: the artifact's operating point).
+
+        Parameters
+        ----------
+        operating_point : str, optional
+        knowledge : str, optional
+            What was known of the occupant (:data:`KNOWLEDGE`): feature set 3
+            artifacts set each operating point's threshold for each, so that
+            its promise holds for the information at hand; None, or an older
+            artifact: the operating point's one threshold.
 
         Raises
         ------
         KeyError
             An operating point the artifact does not define.
         """
-        return self.thresholds[operating_point or self.default_operating_point]
+        name = operating_point or self.default_operating_point
+        if knowledge is not None and name in self.knowledge_thresholds:
+            return self.knowledge_thresholds[name][knowledge]
+        return self.thresholds[name]
 
 
 def default_artifact_path() -> Path:

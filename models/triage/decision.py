@@ -3,6 +3,7 @@ models and the statistical baseline; the case-level decision is the worst occupa
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Mapping
 
 from models.baseline.logistic import BaselineFeatures
@@ -138,15 +139,20 @@ def _risk_decision(
     threshold = (
         models.threshold_override
         if models.threshold_override is not None
-        else risk_model.threshold(name)
+        else risk_model.threshold(name, prediction.knowledge)
     )
-    return decide(
+    decided = decide(
         prediction.probability,
         prediction.ci95,
         threshold,
         outcome=risk_model.outcome,
         model=f"{risk_model.name}@{risk_model.version}",
         operating_point=None if models.threshold_override is not None else name,
+    )
+    return dataclasses.replace(
+        decided,
+        unknown_inputs_range95=prediction.unknown_inputs_range95,
+        knowledge=prediction.knowledge if risk_model.knowledge_thresholds else None,
     )
 
 

@@ -7,18 +7,22 @@ from dataclasses import dataclass
 
 from models.assumptions import Assumption, AssumptionCode
 from models.field.features import FieldInputs, field_inputs
+from models.field.measurement import DeltaVSource, SourcedRiskInputs
 from models.field.model import FieldModel, FieldPrediction
+from models.field.risk_children import Restraint
 from models.field.risk_features import MODEL_YEAR_CLAMP, AirbagCode, RiskInputs, SeatSide
-from models.field.risk_impacts import ImpactRiskInputs
 from models.field.risk_model import RiskModel, RiskPrediction
 from models.impact_mode import ImpactClassification, classify_impact, occupant_side
 from models.notification import (
     AirbagState,
+    ChildRestraint,
     CrashNotification,
     DriveSide,
     Occupant,
+    Pulse,
     Seat,
     Sex,
+    SummaryPulse,
 )
 from models.pulse import ProcessedPulse, process_pulse
 from models.triage.decision import _baseline_decision
@@ -113,7 +117,26 @@ def _occupant_evidence(
 ) -> OccupantEvidence:
     impact = classify_impact(pulse.pdof_deg, occupant.seat, notification.drive_side)
     answer: _LpmAnswer | None = None
-    if impact.in_lpm_coverage:
+    if not occupant.belt_known:
+        assumptions.append(
+            Assumption(
+                AssumptionCode.BELT_UNKNOWN,
+                f"occupants[{index}]: belt use unknown: the field risk model integrates over "
+                "belt use at this seat; the occupant models and the baseline take unbelted",
+                index,
+            )
+        )
+    if occupant.child and occupant.seat.front_row:
+        # the occupant models are adult dummies: no explanation of a child
+        assumptions.append(
+            Assumption(
+                AssumptionCode.CHILD_WITHOUT_OCCUPANT_MODEL,
+                f"occupants[{index}]: a child (age under 16 or in a child seat): the occupant "
+                "models are adult dummies and give no explanation; the field risk model decides",
+                index,
+            )
+        )
+    elif impact.in_lpm_coverage:
         params = models.parameter_sets[notification.vehicle_model]
         answer = _lpm_occupant(index, occupant, impact, pulse, params, models, assumptions)
     elif occupant.seat.front_row:  # other seats: said with the field model's assumptions
@@ -208,7 +231,7 @@ def risk_inputs(
     ``multiple_impacts``).
     """
     side = occupant_side(occupant.seat, notification.drive_side)
-    return ImpactRiskInputs(
+    return SourcedRiskInputs(
         delta_v_kmh=float(pulse.delta_v_kmh),
         pdof_deg=float(pulse.pdof_deg),
         seat_row=occupant.seat.row,
@@ -231,7 +254,33 @@ def risk_inputs(
         mass_kg=occupant.mass_kg,
         model_year=notification.model_year,
         impact_count=notification.impact_count,
+        restraint=restraint_state(occupant),
+        delta_v_source=delta_v_source(notification.pulse),
     )
+
+
+def delta_v_source(pulse: Pulse) -> DeltaVSource:
+    """Where a notification's delta-V comes from: a summary says it (measured by default,
+    what a telematics unit sends); an acceleration or EDR delta-V record is measured."""
+    if isinstance(pulse, SummaryPulse):
+        return DeltaVSource(pulse.delta_v_source)
+    return DeltaVSource.MEASURED
+
+
+def restraint_state(occupant: Occupant) -> Restraint | None:
+    """The field data's restraint state of an occupant (None: unknown, integrated over).
+
+    A child seat of any kind is the data's "child seat"; a child's lap-shoulder
+    belt is belted; otherwise the belt as sensed, unknown where not monitored.
+    """
+    cr = occupant.child_restraint
+    if cr is not None:
+        if cr.child_seat:
+            return Restraint.CHILD_SEAT
+        return Restraint.BELTED if cr is ChildRestraint.LAP_SHOULDER_BELT else Restraint.NONE
+    if not occupant.belt_known:
+        return None
+    return Restraint.BELTED if occupant.belted else Restraint.NONE
 
 
 def notification_risk_inputs(notification: CrashNotification) -> list[RiskInputs]:
@@ -289,7 +338,39 @@ def _risk_assumptions(
         ),
     }
     out = [Assumption(*texts[name], index) for name in prediction.imputed]
-    if occupant.age_years is not None and occupant.age_years < 16.0:
+    if "delta_v_kmh" in prediction.integrated and model.measurement is not None:
+        out.append(
+            Assumption(
+                AssumptionCode.DELTA_V_MEASURED,
+                f"{who}: delta-V measured by the vehicle ({inputs.delta_v_kmh:.1f} km/h): the "
+                "field risk models learned reconstructed delta-V, which reads lower; the "
+                "probability is the average over the reconstructed delta-V the measurement "
+                f"model ({model.measurement.label}) gives for it",
+                index,
+            )
+        )
+    if any(k != "delta_v_kmh" for k in prediction.integrated):
+        words = {
+            "age_years": "age",
+            "female": "sex",
+            "stature_cm": "stature",
+            "mass_kg": "mass",
+            "restraint": "belt use",
+        }
+        named = ", ".join(words[k] for k in prediction.integrated if k in words)
+        spread = prediction.unknown_inputs_range95
+        out.append(
+            Assumption(
+                AssumptionCode.INPUTS_INTEGRATED,
+                f"{who}: {named} unknown: the probability is the average over such occupants "
+                f"of this seat in the field data (the spread over them "
+                + (f"{spread[0]:.4f}-{spread[1]:.4f}" if spread else "not computed")
+                + ", in `unknown_inputs_range95`)",
+                index,
+            )
+        )
+    covers_children = model.donors is not None
+    if occupant.age_years is not None and occupant.age_years < 16.0 and not covers_children:
         out.append(
             Assumption(
                 AssumptionCode.OUTSIDE_FIELD_POPULATION,
@@ -306,6 +387,19 @@ def _risk_assumptions(
                 AssumptionCode.MODEL_YEAR_BEYOND_DATA,
                 f"{who}: model year {year} is outside the field risk models' data "
                 f"({lo_year:.0f}-{hi_year:.0f}): they take {min(max(year, lo_year), hi_year):.0f}",
+                index,
+            )
+        )
+    if (
+        model.measurement is None
+        and isinstance(inputs, SourcedRiskInputs)
+        and inputs.delta_v_source is DeltaVSource.MEASURED
+    ):
+        out.append(
+            Assumption(
+                AssumptionCode.DELTA_V_READ_AS_RECONSTRUCTED,
+                f"{who}: delta-V measured by the vehicle, read as reconstructed by "
+                f"{model.name}@{model.version} (no measurement model): the probability errs high",
                 index,
             )
         )

@@ -54,7 +54,8 @@ __all__ = [
 #: from the one cases stored before the split record: those keep theirs (a record of
 #: the code that answered them), the code's behaviour is unchanged. The field risk
 #: model's evaluators (``field/risk_model.py``, ``field/boosted.py``) count too since
-#: field model 3.1.0: its artifact names the model, this the code that evaluates it.
+#: field model 3.1.0: its artifact names the model, this the code that evaluates it; and
+#: since 3.3.0 the integration over unknown inputs and the delta-V measurement model.
 TRIAGE_SOURCES = (
     "triage/result.py",
     "triage/loading.py",
@@ -70,6 +71,8 @@ TRIAGE_SOURCES = (
     "lpm/domain.py",
     "field/risk_model.py",
     "field/boosted.py",
+    "field/unknowns.py",
+    "field/measurement.py",
 )
 
 
@@ -130,6 +133,13 @@ class EngineModels:
         if self.field is not None:
             f = self.field
             infos["field_model"] = ModelInfo(name=f.name, version=f.version, sha256=f.sha256)
+            measurement = getattr(f, "measurement", None)
+            if measurement is not None:  # the delta-V measurement model it reads through
+                infos["delta_v_measurement"] = ModelInfo(
+                    name=measurement.name,
+                    version=measurement.version,
+                    sha256=sources_sha256(("field/measurement.py",)),
+                )
         names = sorted(self.parameter_sets) if vehicle_model is None else [vehicle_model]
         for name in names:
             ps = self.parameter_sets[name]

@@ -92,6 +92,13 @@ class TriageDecision:
         Name of the model that gave it.
     operating_point : str or None
         The named operating point the threshold belongs to (field model).
+    unknown_inputs_range95 : (float, float) or None
+        Field risk model: the spread of the probability over the occupant
+        inputs that were unknown and integrated over (2.5 and 97.5
+        percentiles); not a confidence interval. None when all were known.
+    knowledge : str or None
+        Field risk model: what was known of the occupant, which the threshold
+        was set for (``adult``, ``child``, ``age_unknown``).
     """
 
     iss15_plus: bool
@@ -102,6 +109,8 @@ class TriageDecision:
     outcome: str = LPM_OUTCOME
     model: str = "occupant_models"
     operating_point: str | None = None
+    unknown_inputs_range95: tuple[float, float] | None = None
+    knowledge: str | None = None
 
 
 @dataclass(frozen=True)

@@ -39,7 +39,7 @@ __all__ = ["triage"]
 def _used_models(models: EngineModels, vehicle_model: str, used_lpm: bool) -> dict[str, ModelInfo]:
     infos = models.model_infos(vehicle_model)
     if not used_lpm:
-        keep = ("baseline", "field_model", "triage_code")
+        keep = ("baseline", "field_model", "delta_v_measurement", "triage_code")
         return {k: infos[k] for k in keep if k in infos}
     return infos
 
@@ -139,12 +139,20 @@ def triage(notification: CrashNotification, models: EngineModels) -> TriageResul
     occupants: list[OccupantTriage] = []
     risk_predictions: list[RiskPrediction] = []
     field_ms = 0.0
+    evidences = [
+        _occupant_evidence(i, occupant, notification, pulse, models, assumptions)
+        for i, occupant in enumerate(notification.occupants)
+    ]
+    if isinstance(field_model, RiskModel):  # every occupant at once: one walk of the trees
+        tf = time.perf_counter()
+        all_inputs = [risk_inputs(o, notification, pulse) for o in notification.occupants]
+        all_risks = field_model.predict_many(all_inputs)
+        field_ms += 1000.0 * (time.perf_counter() - tf)
     for i, occupant in enumerate(notification.occupants):
-        evidence = _occupant_evidence(i, occupant, notification, pulse, models, assumptions)
+        evidence = evidences[i]
         tf = time.perf_counter()
         if isinstance(field_model, RiskModel):
-            inputs = risk_inputs(occupant, notification, pulse)
-            risk = field_model.predict(inputs)
+            inputs, risk = all_inputs[i], all_risks[i]
             risk_predictions.append(risk)
             decision = _risk_decision(field_model, models, risk)
             answered = dataclasses.replace(

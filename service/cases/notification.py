@@ -56,6 +56,9 @@ MAX_SAMPLE_RATE_HZ = limits.MAX_ACCELERATION_SAMPLE_RATE_HZ
 MIN_SERIES_SAMPLES, MAX_SERIES_SAMPLES = limits.MIN_SAMPLES, limits.MAX_SAMPLES
 MIN_SERIES_MS, MAX_SERIES_MS = limits.MIN_RECORD_DURATION_MS, limits.MAX_RECORD_DURATION_MS
 MIN_EDR_INTERVAL_MS, MAX_EDR_INTERVAL_MS = limits.MIN_EDR_INTERVAL_MS, limits.MAX_EDR_INTERVAL_MS
+#: Occupants of one notification: one per seat, and the wire names nine seats
+#: (VEDS VehicleSeatLocationCategoryCode 1-9).
+MAX_OCCUPANTS: Final[int] = len(engine.Seat)
 #: Hybrid III anthropometry used to map stature and mass to the nearer dummy
 #: (defined once in the engine).
 DUMMY_STATURE_MASS = engine.DUMMY_STATURE_MASS
@@ -248,10 +251,33 @@ class SummaryPulseIn(WireModel):
         le=400.0,
         description="Pulse duration T, ms; omitted: chosen by the engine from delta-V.",
     )
+    delta_v_source: Literal["measured", "reconstructed"] = Field(
+        default="measured",
+        description="Where `delta_v_kmh` comes from. `measured` (the default: what a telematics "
+        "unit sends): by the vehicle's own sensors, the airbag module's EDR record or the "
+        "telematics unit's accelerometer. `reconstructed`: from the vehicle's crush after the "
+        "crash (WinSMASH), as the field data's. The field risk models learned reconstructed "
+        "delta-V, which reads about a fifth lower than measured: a measured value is read "
+        "through the delta-V measurement model (`delta_v_measured`). Acceleration and EDR "
+        "delta-V pulses are measured by nature.",
+        examples=["measured"],
+    )
+    delta_v_axes: Literal["resultant", "longitudinal"] = Field(
+        default="resultant",
+        description="`resultant` (the default): the magnitude of the velocity change. "
+        "`longitudinal`: its component along the vehicle's long axis only (49 CFR 563 requires "
+        "only the longitudinal record); read as the resultant along `pdof_deg` "
+        "(|longitudinal| / |cos PDOF|), refused (422) for a PDOF more than 60 deg from the long "
+        "axis, where the longitudinal record does not carry the crash.",
+    )
 
     def to_engine(self) -> engine.SummaryPulse:
         return engine.SummaryPulse(
-            delta_v_kmh=self.delta_v_kmh, pdof_deg=self.pdof_deg, duration_ms=self.duration_ms
+            delta_v_kmh=self.delta_v_kmh,
+            pdof_deg=self.pdof_deg,
+            duration_ms=self.duration_ms,
+            delta_v_source=self.delta_v_source,
+            delta_v_axes=self.delta_v_axes,
         )
 
 
@@ -385,7 +411,28 @@ class OccupantIn(WireModel):
         default=None, ge=0.0, le=limits.MAX_AGE_YEARS, description="Age, years."
     )
     sex: engine.Sex | None = Field(default=None, description="Sex of the occupant.")
-    belted: bool = Field(description="Seat belt fastened.")
+    belted: bool | None = Field(
+        default=None,
+        description="Seat belt fastened, as the belt buckle switch senses it. Omitted or null: "
+        "unknown (many rear belts are not monitored): the field risk model integrates over belt "
+        "use at this seat (`inputs_integrated`), the occupant models take unbelted "
+        "(`belt_unknown`).",
+    )
+    child_restraint: engine.ChildRestraint | None = Field(
+        default=None,
+        description="How a child is restrained, where known: a rear-facing, forward-facing or "
+        "booster seat, a child seat of unknown kind, the lap-shoulder belt, or none. The field "
+        "data know only 'child seat', so the four seat kinds are decided alike; the kind is "
+        "kept for the record and the EMS handover (NEMSIS eInjury.07). Given, it decides the "
+        "restraint over `belted` (a child seat counts as restrained); `lap_shoulder_belt` with "
+        "`belted: false`, or `none` with `belted: true`, is refused.",
+    )
+    child_restraint_unsecured: bool | None = Field(
+        default=None,
+        description="The child seat or belt was not secured, where a person said so (a car "
+        "cannot sense it). With an age of 0-9 it is the field triage guideline's pediatric "
+        "criterion (unrestrained or in an unsecured child seat).",
+    )
     frontal_airbag: engine.AirbagState = Field(
         description="Frontal airbag in front of this occupant."
     )
@@ -458,13 +505,33 @@ class OccupantIn(WireModel):
             return engine.SeatTrackSource.FOREMOST_SWITCH_ON
         return engine.SeatTrackSource.FOREMOST_SWITCH_OFF
 
+    @model_validator(mode="after")
+    def _restraint_agrees(self) -> OccupantIn:
+        cr = self.child_restraint
+        if cr is engine.ChildRestraint.LAP_SHOULDER_BELT and self.belted is False:
+            raise ValueError("`child_restraint` lap_shoulder_belt contradicts `belted: false`")
+        if cr is engine.ChildRestraint.NONE and self.belted is True:
+            raise ValueError("`child_restraint` none contradicts `belted: true`")
+        return self
+
+    def resolved_belted(self) -> bool:
+        """The belt state the occupant models take (unknown: unbelted, the conservative)."""
+        if self.child_restraint is not None and self.child_restraint is not (
+            engine.ChildRestraint.NONE
+        ):
+            return True
+        return bool(self.belted)
+
     def to_engine(self, index: int = 0) -> tuple[engine.Occupant, Assumption | None]:
         body, note = self.resolved_body(index)
         return (
             engine.Occupant(
                 seat=self.seat,
                 body=body,
-                belted=self.belted,
+                belted=self.resolved_belted(),
+                belt_known=self.belted is not None or self.child_restraint is not None,
+                child_restraint=self.child_restraint,
+                child_restraint_unsecured=self.child_restraint_unsecured,
                 frontal_airbag=self.frontal_airbag,
                 side_airbag=self.side_airbag,
                 age_years=self.age_years,
@@ -506,9 +573,10 @@ class CrashNotificationIn(WireModel):
     crash: CrashIn = Field(description="The crash measurements.")
     occupants: list[OccupantIn] = Field(
         min_length=1,
-        max_length=5,
-        description="Occupants, one per seat: the front row (occupant models) and the "
-        "second row (answered by the statistical baseline).",
+        max_length=MAX_OCCUPANTS,
+        description="Occupants, one per seat (up to nine: every seat the wire names). Every "
+        "occupant gets the field risk model's decision; the front outboard seats' adults also "
+        "the occupant models' explanation.",
     )
 
     model_config = ConfigDict(
@@ -535,9 +603,14 @@ class CrashNotificationIn(WireModel):
 
     @model_validator(mode="after")
     def _unique_seats(self) -> CrashNotificationIn:
-        seats = [o.seat for o in self.occupants]
-        if len(set(seats)) != len(seats):
-            raise ValueError("each seat may appear once in `occupants`")
+        seen: set[engine.Seat] = set()
+        for o in self.occupants:
+            if o.seat in seen:
+                raise ValueError(
+                    f"seat {o.seat.value!r} is named twice in `occupants`: each seat may "
+                    "appear once"
+                )
+            seen.add(o.seat)
         return self
 
     def to_engine(self) -> tuple[engine.CrashNotification, list[Assumption]]:

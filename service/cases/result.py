@@ -83,6 +83,22 @@ class TriageOut(OutModel):
         "under-triage <= 5 %; field model 2.0.0: `sens80_per_mode`, `sens80`, `bahouth`); "
         "null when `AACN_TRIAGE_THRESHOLD` overrides it or for second opinions.",
     )
+    unknown_inputs_range95: tuple[float, float] | None = Field(
+        default=None,
+        description="Field risk model: where some occupant inputs were unknown (age, sex, "
+        "stature, mass, belt use), `probability` is the average over such occupants of the "
+        "same seat in the field data, and this is the spread of the probability over them "
+        "(2.5 and 97.5 percentiles) [low, high]. Not a confidence interval: that is "
+        "`probability_ci95`. Null when every input was known, and for second opinions.",
+    )
+    knowledge: str | None = Field(
+        default=None,
+        description="Field risk model 3.3.0 on: what was known of the occupant, which the "
+        "operating point's threshold was set for so that its promise holds for it: `adult` "
+        "(age given, 16 or older), `child` (age given, under 16), `age_unknown`. The "
+        "`threshold` is that one. Null for older models and second opinions.",
+        examples=["age_unknown"],
+    )
 
 
 class IssOut(OutModel):
@@ -391,6 +407,8 @@ def _triage_out(d: TriageDecision) -> TriageOut:
         outcome=d.outcome,
         model=d.model,
         operating_point=d.operating_point,
+        unknown_inputs_range95=d.unknown_inputs_range95,
+        knowledge=d.knowledge,
     )
 
 

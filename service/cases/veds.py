@@ -496,12 +496,13 @@ def _occupants(m: _Mapper, vehicle: Element, vehicle_path: str) -> list[dict[str
         monitored = m.boolean(
             seat_element, "veds:VehicleSeatbeltMonitoredIndicator", path, required=False
         )
+        belted: bool | None
         if fastened is None or monitored is False:
-            belted = False
+            belted = None  # unknown: the field risk model integrates over belt use
             why = "not reported" if fastened is None else "not monitored"
             m.assume(
                 AssumptionCode.VEDS_BELT_NOT_REPORTED,
-                f"{prefix}: belt {why} (seat code {code}): unbelted assumed",
+                f"{prefix}: belt {why} (seat code {code}): belt use unknown",
                 index,
                 field=f"{prefix}.belted",
             )
@@ -509,7 +510,9 @@ def _occupants(m: _Mapper, vehicle: Element, vehicle_path: str) -> list[dict[str
             belted = fastened
             m.map(f"{path}/veds:VehicleSeatbeltFastenedIndicator", f"{prefix}.belted", belted)
 
-        occupant: dict[str, Any] = {"seat": seat.value, "belted": belted}
+        occupant: dict[str, Any] = {"seat": seat.value}
+        if belted is not None:
+            occupant["belted"] = belted
         if seat.front_row:
             occupant["frontal_airbag"] = (frontal or AirbagState.NOT_DEPLOYED).value
         else:

@@ -416,7 +416,7 @@ def test_a_document_without_a_pulse_or_an_occupied_seat_is_422(api: ApiClient) -
     assert _case_count(api) == 0
 
 
-def test_a_belt_not_reported_is_unbelted_and_said_so(api: ApiClient) -> None:
+def test_a_belt_not_reported_is_unknown_and_said_so(api: ApiClient) -> None:
     raw = _doc("kph-frontal.xml").replace(
         b"<veds:VehicleSeatbeltFastenedIndicator>true</veds:VehicleSeatbeltFastenedIndicator>", b""
     )
@@ -425,7 +425,8 @@ def test_a_belt_not_reported_is_unbelted_and_said_so(api: ApiClient) -> None:
     notes = [a for a in r.json()["assumptions"] if a["code"] == "veds_belt_not_reported"]
     assert [a["occupant"] for a in notes] == [0]
     stored = stored_case(api, r.json()["case_id"])
-    assert stored["notification"]["occupants"][0]["belted"] is False
+    assert "belted" not in stored["notification"]["occupants"][0]  # unknown, not unbelted
+    assert "belt_unknown" in {a["code"] for a in r.json()["assumptions"]}
 
 
 # ------------------------------------------------------------ hostile XML (4xx)

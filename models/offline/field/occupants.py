@@ -7,14 +7,15 @@ for (:func:`fit_population`, each rule named in :data:`POPULATION_RULES`):
 
 - delta-V reconstructed and the injuries known (ISS not empty: NASS codes
   unknown injuries ISS 0, the file leaves them empty);
-- adults: age known and at least 16 years [R] (the age the MAIS calibration
-  file and the occupant models take as adult; children ride in child seats
-  the notification does not describe);
+- age known, children included (feature set 3 gives children their own
+  terms, :mod:`models.field.risk_children`; until field model 3.3.0 the
+  population was adults of 16 and older);
 - a seat a notification can name: rows 1-3, left, middle or right (NASS seat
   codes 11-13, 21-23, 31-33 and the row's other positions with a side; rows
   4-5 and "other" are not in VEDS);
-- manual belt use known, belted or not (child-seat codes are a child
-  restraint; unknown belt use is not a state a notification sends);
+- restraint known: belted, none, or a child seat (NASS-CDS codes every child
+  restraint alike); unknown belt use is integrated over at request time
+  (:mod:`models.field.unknowns`), from the known;
 - frontal airbag state known (deployed, not deployed, none).
 
 Outcomes: ISS >= 16 (ISS 15 cannot occur, so this is ISS 15+), and per body
@@ -62,16 +63,17 @@ REGIONS: Final[tuple[str, ...]] = (
     "lower_extremity",
 )
 
-#: Minimum age of the fitted population, years [R] (adult, as the occupant
-#: models and the MAIS calibration file).
+#: Minimum age of an adult, years [R] (the occupant models and the MAIS
+#: calibration file take 16 and older as adult; the field risk models' data
+#: hold children too since 3.3.0).
 ADULT_AGE_YEARS: Final[float] = 16.0
 
 #: The filter rules in order, as the model card states them.
 POPULATION_RULES: Final[tuple[tuple[str, str], ...]] = (
     ("known", "delta-V reconstructed and ISS known (unknown injuries are empty, not ISS 0)"),
-    ("adult", "age known and >= 16 years"),
+    ("age", "age known (children included)"),
     ("seat", "seat rows 1-3 with a side (left, middle, right): the seats VEDS can name"),
-    ("belt", "manual belt use known, belted or none (child seats and unknown excluded)"),
+    ("belt", "restraint known: belted, none or a child seat (unknown excluded)"),
     ("airbag", "frontal airbag state known (deployed, not deployed, none)"),
 )
 
@@ -138,9 +140,9 @@ def fit_population(df: pd.DataFrame) -> Population:
     """The occupants the field risk models are fitted and evaluated on (module docstring)."""
     masks = {
         "known": df["delta_v_kmh"].notna() & df["iss"].notna(),
-        "adult": df["age_years"].notna() & (df["age_years"] >= ADULT_AGE_YEARS),
+        "age": df["age_years"].notna(),
         "seat": df["seat_row"].isin([1, 2, 3]) & df["seat_side"].isin(["left", "middle", "right"]),
-        "belt": df["belt"].isin(["belted", "none"]),
+        "belt": df["belt"].isin(["belted", "none", "child_seat"]),
         "airbag": df["frontal_airbag"].isin(["deployed", "not_deployed", "none"]),
     }
     keep = pd.Series(True, index=df.index)

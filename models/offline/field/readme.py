@@ -30,6 +30,10 @@ from models.notification import (
     SummaryPulse,
     nearest_body,
 )
+from models.offline.field.risk_report_knowledge import (
+    readme_knowledge_lines,
+    readme_measured_lines,
+)
 from models.triage import load_engine_models, triage
 
 __all__ = [
@@ -174,8 +178,9 @@ def readme_block(doc: Mapping[str, Any], example: Mapping[str, Any]) -> str:
     lines = [
         BEGIN,
         f"Field risk model `{doc['model']['name']}` {doc['model']['version']}: P(ISS 15+) "
-        f"fitted on NASS-CDS {data['years'][0]}-{data['years'][1]} ({data['rows']:,} adult "
-        f"occupants of {data['crashes']:,} crashes), calibrated with the national weights; "
+        f"fitted on NASS-CDS {data['years'][0]}-{data['years'][1]} ({data['rows']:,} "
+        + ("occupants, children included, " if "unknowns" in doc else "adult occupants ")
+        + f"of {data['crashes']:,} crashes), calibrated with the national weights; "
         f"held out by crash ({doc['config']['n_splits']} folds, the occupants of a crash never on "
         "both sides; 95 % intervals by resampling crashes; `docs/field/MODEL_CARD.md`):",
         "",
@@ -199,6 +204,8 @@ def readme_block(doc: Mapping[str, Any], example: Mapping[str, Any]) -> str:
         f"[{v['auc_ci95'][0]:.3f}, {v['auc_ci95'][1]:.3f}] on held-out vehicles (OnStar's "
         "published vehicle-level figure, an anchor: 0.84).",
         "",
+        *([*readme_knowledge_lines(doc), ""] if "unknowns" in doc else []),
+        *([*readme_measured_lines(doc), ""] if "measurement_model" in doc else []),
         "The example above answers "
         f"P(ISS 15+) = {example['probability']:.4f} "
         f"[{example['probability_ci95'][0]:.4f}, {example['probability_ci95'][1]:.4f}] "

@@ -29,7 +29,7 @@ from sklearn.ensemble import HistGradientBoostingClassifier
 
 from models.arrays import FloatArray, IntArray
 from models.field.boosted import ALWAYS_LEFT, N_LEAVES, N_SPLITS, TREE_DEPTH, TreeBag
-from models.field.risk_impacts import ALL_COLUMNS_2
+from models.field.risk_children import ALL_COLUMNS_3
 from models.offline.field.risk_core import CalibratedScore, weighted_recalibration
 from models.offline.field.risk_metrics import crash_resamples
 
@@ -62,7 +62,7 @@ def single_boosted(
     cst = (
         None
         if columns is None
-        else [1 if ALL_COLUMNS_2[c] in MONOTONE_INCREASING else 0 for c in columns]
+        else [1 if ALL_COLUMNS_3[c] in MONOTONE_INCREASING else 0 for c in columns]
     )
     return HistGradientBoostingClassifier(
         max_iter=n_trees,

@@ -52,13 +52,26 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument(
         "--quick", action="store_true", help="a fifth of the crashes, few refits (a smoke run)"
     )
+    parser.add_argument(
+        "--regions-from",
+        default=None,
+        metavar="VERSION",
+        help="refit the decision (ISS 15+) only and carry the region models of the shipped "
+        "artifact of VERSION (models/offline/field/risk_decision.py); reuses the stage cache",
+    )
     args = parser.parse_args(argv)
     cfg = (
         RiskConfig(subsample=0.2, n_bootstrap=5, n_metric_bootstrap=30, n_splits=3)
         if args.quick
         else RiskConfig()
     )
-    fit = fit_risk(cfg, cache_dir=None if args.no_cache else args.cache)
+    cache = None if args.no_cache else args.cache
+    if args.regions_from is not None:
+        from models.offline.field.risk_decision import fit_decision
+
+        fit = fit_decision(cfg, cache, args.regions_from)
+    else:
+        fit = fit_risk(cfg, cache_dir=cache)
     path = write_risk_artifact(fit.artifact, args.artifact)
     card = write_risk_model_card(fit, args.out or default_report_dir())
     sys.stderr.write(f"artifact: {path}\nmodel card: {card}\n")

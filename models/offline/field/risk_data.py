@@ -19,6 +19,7 @@ import pandas as pd
 from models.arrays import FloatArray
 from models.field.risk_features import RiskImputation
 from models.field.risk_impacts import IMPACT_COUNT_CLAMP
+from models.field.unknowns import AGE_BANDS_YEARS
 from models.offline.field.occupants import ISS15_PLUS, REGIONS, pdof_from_components_deg
 
 __all__ = [
@@ -98,7 +99,8 @@ def risk_arrays(rows: pd.DataFrame, imputation: RiskImputation) -> dict[str, obj
         "seat_row": rows["seat_row"].to_numpy(dtype=np.float64),
         "seat_side": rows["seat_side"].astype(str).tolist(),
         "driver": (rows["role"] == "driver").to_numpy(dtype=np.float64),
-        "belted": (rows["belt"] == "belted").to_numpy(dtype=np.float64),
+        "belted": (rows["belt"] != "none").to_numpy(dtype=np.float64),  # a child seat restrains
+        "restraint": rows["belt"].astype(str).tolist(),
         "airbag": rows["frontal_airbag"].astype(str).tolist(),
         "rollover": (qt > 0).astype(np.float64),
         "quarter_turns": qt,
@@ -106,11 +108,22 @@ def risk_arrays(rows: pd.DataFrame, imputation: RiskImputation) -> dict[str, obj
         "impact_count": np.clip(rows["n_events"].to_numpy(dtype=np.float64), *IMPACT_COUNT_CLAMP),
         "age_years": rows["age_years"].to_numpy(dtype=np.float64),
         "female": rows["female"].fillna(imp.female).to_numpy(dtype=np.float64),
-        "stature_cm": rows["stature_cm"].fillna(imp.stature_cm).to_numpy(dtype=np.float64),
-        "mass_kg": rows["mass_kg"].fillna(imp.mass_kg).to_numpy(dtype=np.float64),
+        "stature_cm": _by_age_band(rows, "stature_cm", imp.stature_cm),
+        "mass_kg": _by_age_band(rows, "mass_kg", imp.mass_kg),
         "model_year": rows["model_year"].fillna(imp.model_year).to_numpy(dtype=np.float64),
         "accident_year": rows["year"].to_numpy(dtype=np.float64),
     }
+
+
+def _by_age_band(rows: pd.DataFrame, column: str, default: float) -> FloatArray:
+    """A body measure with unknowns taken as the median of the row's age band
+    (:data:`models.field.unknowns.AGE_BANDS_YEARS`: a child's unknown stature
+    is not an adult's), else `default`."""
+    band = np.searchsorted(AGE_BANDS_YEARS, rows["age_years"].to_numpy(), side="right") - 1
+    values = rows[column]
+    fill = values.groupby(band).transform("median")
+    out: FloatArray = values.fillna(fill).fillna(default).to_numpy(dtype=np.float64)
+    return out
 
 
 def outcomes(rows: pd.DataFrame) -> list[Outcome]:

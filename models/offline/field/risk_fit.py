@@ -8,7 +8,7 @@ in the vehicle ISS 15+):
 
 1. **Population and inputs** (:mod:`.occupants`, :mod:`.risk_data`): adults in
    seats a notification can name, every notification field the file holds,
-   as :func:`models.field.risk_impacts.design_columns_2` builds it (feature
+   as :func:`models.field.risk_impacts.design_columns_3` builds it (feature
    set 2: set 1's columns, the PDOF seen from the occupant's side and the
    impact count).
 2. **Folds by crash**: every crash (year, psu, caseno) in one fold.
@@ -53,13 +53,15 @@ import pandas as pd
 from tqdm import tqdm
 
 from models.arrays import FloatArray, IntArray
-from models.field.risk_features import FEATURE_GROUPS, RiskImputation
-from models.field.risk_impacts import (
-    ALL_COLUMNS_2,
-    FEATURE_GROUPS_2,
-    IMPACT_GROUPS,
-    design_columns_2,
+from models.field.risk_children import (
+    ALL_COLUMNS_3,
+    CHILD_GROUPS,
+    FEATURE_GROUPS_3,
+    design_columns_3,
 )
+from models.field.risk_features import FEATURE_GROUPS, RiskImputation
+from models.field.risk_impacts import IMPACT_GROUPS
+from models.field.unknowns import seat_group
 from models.offline.field.occupants import crash_keys, fit_population, load_occupants
 from models.offline.field.risk_blend import BlendFitted
 from models.offline.field.risk_boosted import BoostedFitted, fit_bag, single_boosted
@@ -82,9 +84,9 @@ __all__ = [
 ]
 
 #: Candidate groups of the regression (its backward pass keeps some): feature
-#: set 1's and the impact count (a count has a linear effect on the log-odds to
-#: try, as the plain regression does).
-REGRESSION_GROUPS: Final[tuple[str, ...]] = (*FEATURE_GROUPS, "impact_count")
+#: set 1's, the impact count (a count has a linear effect on the log-odds to
+#: try, as the plain regression does) and feature set 3's child terms.
+REGRESSION_GROUPS: Final[tuple[str, ...]] = (*FEATURE_GROUPS, "impact_count", *CHILD_GROUPS)
 
 #: Groups offered to the trees beyond the regression's kept ones (feature set
 #: 2's): a signed angle is no linear effect, and the count where the regression
@@ -175,7 +177,7 @@ class RiskData:
     imputation : RiskImputation
     impact_count_imputed : float
         The impact count served for multiple impacts of unknown count.
-    x : ndarray, shape (n, len(ALL_COLUMNS_2))
+    x : ndarray, shape (n, len(ALL_COLUMNS_3))
     w : ndarray, shape (n,)
         ``ratwgt``.
     crash, vehicle : ndarray of int, shape (n,)
@@ -196,15 +198,17 @@ class RiskData:
     year: FloatArray
     outcomes: list[Outcome]
     mode: np.ndarray = field(repr=False)
+    arrays: dict[str, Any] = field(default_factory=dict, repr=False)
+    group: np.ndarray = field(default_factory=lambda: np.empty(0, dtype=object), repr=False)
 
     def column(self, name: str) -> FloatArray:
         """One design column by name."""
-        out: FloatArray = self.x[:, ALL_COLUMNS_2.index(name)]
+        out: FloatArray = self.x[:, ALL_COLUMNS_3.index(name)]
         return out
 
 
 def _mode_labels(x: FloatArray) -> np.ndarray:
-    col = {n: x[:, i] for i, n in enumerate(ALL_COLUMNS_2)}
+    col = {n: x[:, i] for i, n in enumerate(ALL_COLUMNS_3)}
     mode = np.full(x.shape[0], "frontal", dtype=object)
     mode[col["rear"] > 0] = "rear"
     mode[col["far_side"] > 0] = "far_side"
@@ -222,7 +226,15 @@ def load_risk_data(subsample: float = 1.0, seed: int = 0) -> RiskData:
         keep = np.random.default_rng(seed).random(crash.max() + 1) < subsample
         rows = rows[keep[crash]].reset_index(drop=True)
     imputation = population_imputation(rows)
-    x = design_columns_2(risk_arrays(rows, imputation))  # type: ignore[arg-type]
+    arrays = risk_arrays(rows, imputation)
+    x = design_columns_3(arrays)  # type: ignore[arg-type]
+    group = np.array(
+        [
+            seat_group(int(r), str(s), d == "driver")
+            for r, s, d in zip(rows["seat_row"], rows["seat_side"], rows["role"], strict=True)
+        ],
+        dtype=object,
+    )
     crash = crash_keys(rows)
     vehicle, _ = pd.factorize(crash.astype(str) + ":" + rows["vehno"].astype(str))
     return RiskData(
@@ -237,6 +249,8 @@ def load_risk_data(subsample: float = 1.0, seed: int = 0) -> RiskData:
         year=rows["year"].to_numpy(dtype=np.float64),
         outcomes=outcomes(rows),
         mode=_mode_labels(x),
+        arrays=arrays,
+        group=group,
     )
 
 
@@ -271,8 +285,8 @@ class _Cache:
 
 def group_columns(groups: Sequence[str]) -> list[int]:
     """Design column indices of the intercept and `groups`."""
-    names = {c for g in groups for c in FEATURE_GROUPS_2[g]}
-    return [0] + [i for i, n in enumerate(ALL_COLUMNS_2) if n in names]
+    names = {c for g in groups for c in FEATURE_GROUPS_3[g]}
+    return [0] + [i for i, n in enumerate(ALL_COLUMNS_3) if n in names]
 
 
 def _drift(name: str) -> tuple[bool, bool]:
@@ -353,7 +367,7 @@ def fit_spec(
 def served_x(d: RiskData, rows: IntArray, reference_year: float) -> FloatArray:
     """Design rows as served: the accident year set to the reference (latest fitted) year."""
     x = d.x[rows].copy()
-    x[:, ALL_COLUMNS_2.index("accident_year")] = reference_year
+    x[:, ALL_COLUMNS_3.index("accident_year")] = reference_year
     return x
 
 

@@ -17,6 +17,12 @@ from matplotlib.figure import Figure
 from models.field.risk_features import AirbagCode, RiskInputs, SeatSide
 from models.field.risk_model import REGION_NAMES, RiskModel
 from models.offline.field.published import NHTSA_ALL
+from models.offline.field.risk_report_knowledge import (
+    knowledge_acceptance,
+    knowledge_lines,
+    measured_acceptance,
+    measured_lines,
+)
 from models.offline.field.risk_run import RiskFit
 from models.offline.paths import docs_dir
 from models.units import kmh_to_mph
@@ -194,8 +200,13 @@ def _curves_plot(path: Path, model: RiskModel) -> None:
     axes[0].set_ylabel("P(ISS 15+)")
     axes[3].set_ylabel("P(ISS 15+)")
     imp = model.imputation
+    who = (
+        "age, sex, stature and mass unknown (integrated over the data's drivers)"
+        if model.donors is not None
+        else f"age {imp.age_years:g}"
+    )
     fig.suptitle(
-        f"Driver, age {imp.age_years:g}, model year {imp.model_year:g}, single impact "
+        f"Driver, {who}, model year {imp.model_year:g}, single impact "
         "(95 % band: bootstrap refits by crash)"
     )
     fig.tight_layout()
@@ -463,6 +474,15 @@ def _regions(doc: dict[str, Any]) -> list[str]:
     return lines
 
 
+def _knowledge(doc: dict[str, Any]) -> list[str]:
+    if "unknowns" not in doc:
+        return []
+    out = ["## Children, and what a car senses", *knowledge_lines(doc), ""]
+    if "measurement_model" in doc:
+        out += ["## Measured delta-V", *measured_lines(doc), ""]
+    return out
+
+
 def _card(doc: dict[str, Any]) -> str:
     iss = doc["outcomes"]["iss15"]
     v = doc["vehicle"]["heldout"]
@@ -500,9 +520,15 @@ def _card(doc: dict[str, Any]) -> str:
         "",
         *_population(doc),
         "",
-        "Unknown inputs take the population's values (age, stature, mass: medians; sex: the "
-        "share of "
-        "women; model year: the latest year's median; quarter turns of a reported rollover: the "
+        (
+            "Unknown occupant inputs (age, sex, stature, mass, belt use) are integrated over "
+            "the fitted population's donors of the same seat (below); unknown vehicle inputs "
+            "take the population's values (model year"
+            if "unknowns" in doc
+            else "Unknown inputs take the population's values (age, stature, mass: medians; sex: "
+            "the share of women; model year"
+        )
+        + ": the latest year's median; quarter turns of a reported rollover: the "
         "median of rolled vehicles"
         + (
             "; the impact count of reported multiple impacts: the median of vehicles with two or "
@@ -543,23 +569,41 @@ def _card(doc: dict[str, Any]) -> str:
         "vehicle's probability is never below its riskiest occupant's P(ISS 15+) (these "
         "figures are of the recalibrated value before that floor).",
         "",
-        "## Region risk (issue 39)",
+        *_knowledge(doc),
+        "## Region risk",
         *_regions(doc),
         "",
         f"![regions]({PLOTS['regions']})",
         "",
-        "## Acceptance (issues 38 and 39), measured",
+        "## Acceptance, measured",
         "| item | holds | figure |",
         "|---|---|---|",
         *[f"| {a} | {'yes' if ok else '**no**'} | {fig} |" for a, ok, fig in acceptance(doc)],
+        *[
+            f"| {a} | {'yes' if ok else '**no**'} | {fig} |"
+            for a, ok, fig in (knowledge_acceptance(doc) if "unknowns" in doc else [])
+        ],
+        *[
+            f"| {a} | {'yes' if ok else '**no**'} | {fig} |"
+            for a, ok, fig in (measured_acceptance(doc) if "measurement_model" in doc else [])
+        ],
         "",
         "## Limits",
-        "- Delta-V is NASS-CDS's reconstruction (from crush), which runs lower than EDR delta-V: a "
-        "telematics delta-V reads somewhat higher than the data's, so the probability errs high.",
+        (
+            "- Delta-V is NASS-CDS's reconstruction (from crush), which runs lower than a "
+            "vehicle's measurement: a measured delta-V is read through the measurement model "
+            "(above), whose coefficients rest on two published comparisons and no comparison by "
+            "crash mode or vehicle class."
+            if "measurement_model" in doc
+            else "- Delta-V is NASS-CDS's reconstruction (from crush), which runs lower than EDR "
+            "delta-V: a telematics delta-V reads somewhat higher than the data's, so the "
+            "probability errs high."
+        ),
         f"- Delta-V above {doc['data']['delta_v_max_kmh']:.0f} km/h (the data's largest) is "
         "extrapolated; the spline is clamped at 100 km/h.",
-        "- Children (under 16), child seats and rows 4-5 are outside the fitted population: their "
-        "answers are extrapolations and say so.",
+        "- Rows 4-5 are outside the fitted population. Children are in it (feature set 3), but "
+        "the data know a child seat only as such (rear-facing, forward-facing and booster seats "
+        "alike) and hold few severely injured children: their figures have wide intervals.",
         f"- ISS 15+ model ranking AUC {_f(iss['heldout']['auc'])}; weighted figures are dominated "
         "by few high-weight crashes and have wide intervals.",
     ]

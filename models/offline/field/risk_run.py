@@ -19,8 +19,16 @@ from tqdm import tqdm
 
 from models.arrays import FloatArray, IntArray
 from models.field.features import FieldInputs, FieldMode
+from models.field.measurement import (
+    EARLY_ERA_SHARE,
+    ERA_RATIOS,
+    LATE_ERA_FIRST_YEAR,
+    MEASUREMENT_MODEL,
+    QUADRATURE_POINTS,
+    SD_KMH,
+)
 from models.field.model import FieldModel
-from models.field.risk_impacts import ALL_COLUMNS_2
+from models.field.risk_children import ALL_COLUMNS_3
 from models.field.risk_model import (
     ARTIFACT_SCHEMA,
     OUTCOME,
@@ -50,6 +58,13 @@ from models.offline.field.risk_fit import (
     vehicle_recalibration,
     vehicle_table,
 )
+from models.offline.field.risk_knowledge import (
+    donor_table_of,
+    integrated_oof,
+    knowledge_extras,
+    measured_extras,
+    measured_oof,
+)
 from models.offline.field.risk_metrics import crash_resamples, score, triage_figures
 from models.units import kmh_to_mph
 
@@ -64,7 +79,14 @@ MODEL_NAME: Final[str] = "field_iss15"
 #: 3.2.0 (2026-12-06): feature set 2 (:mod:`models.field.risk_impacts`): the
 #: trees may split on the PDOF seen from the occupant's side and the impact count,
 #: the regression may keep the count; a third kind, a blend of the two.
-MODEL_VERSION: Final[str] = "3.2.0"
+#: 3.3.0 (2026-12-07): feature set 3 (:mod:`models.field.risk_children`): the
+#: decision fitted on every occupant with a known age, children included, with child
+#: terms (a decision-only refit, :mod:`.risk_decision`: the region models are 3.2.0's);
+#: unknown inputs integrated over a donor table (:mod:`models.field.unknowns`); a
+#: measured delta-V read through the delta-V measurement model
+#: (:mod:`models.field.measurement`); thresholds by what is known (adults, children,
+#: ages unknown; each with a measured delta-V).
+MODEL_VERSION: Final[str] = "3.3.0"
 
 #: Groups of the plain regression: linear main effects of every notification
 #: field, unpenalised, no splines or interactions (the reference to match).
@@ -88,7 +110,7 @@ class RiskFit:
 
 
 def _cols(names: Sequence[str]) -> list[int]:
-    return [ALL_COLUMNS_2.index(n) for n in names]
+    return [ALL_COLUMNS_3.index(n) for n in names]
 
 
 def _fixed_oof(
@@ -121,7 +143,7 @@ def _hgb_oof(
 def _legacy_probability(d: RiskData) -> FloatArray:
     """P(MAIS 3+) of field model 2.0.0 for every row (its own inputs)."""
     model = FieldModel.from_artifact(artifact_for_version("2.0.0"))
-    col = {n: d.x[:, i] for i, n in enumerate(ALL_COLUMNS_2)}
+    col = {n: d.x[:, i] for i, n in enumerate(ALL_COLUMNS_3)}
     rows = d.rows
     out = np.empty(len(rows))
     for i in range(len(rows)):
@@ -202,7 +224,7 @@ def _vehicle_heldout(
 
 
 def _subgroups(d: RiskData) -> dict[str, np.ndarray]:
-    col = {n: d.x[:, i] for i, n in enumerate(ALL_COLUMNS_2)}
+    col = {n: d.x[:, i] for i, n in enumerate(ALL_COLUMNS_3)}
     out = {
         f"mode={m}": d.mode == m for m in ("frontal", "near_side", "far_side", "rear", "rollover")
     }
@@ -383,10 +405,26 @@ def fit_risk(config: RiskConfig | None = None, cache_dir: Path | None = None) ->
             return score(o.y[te], pt, d.w[te], res)
 
         st["temporal"] = cache.get(f"temporal_ci_{o.name}", temporal)
+    integrated = cache.get(
+        "integrated_oof",
+        lambda: integrated_oof(d, iss.y, stages["iss15"]["spec"], folds, cfg),
+    )
+    figures["knowledge"] = cache.get(
+        "knowledge",
+        lambda: knowledge_extras(d, stages["iss15"], folds, cfg, PLAIN_COLUMNS, integrated),
+    )
+    measured = cache.get(
+        "measured_oof", lambda: measured_oof(d, iss.y, stages["iss15"]["spec"], folds, cfg)
+    )
+    figures["measured"] = cache.get("measured", lambda: measured_extras(d, cfg, measured))
     specs = {n: s["spec"] for n, s in stages.items()}
     boot = _bootstrap_refits(d, specs, cfg, cache)
     doc = _document(d, cfg, drift, drift_table, stages, figures, boot)
-    oof = {n: s["oof"] for n, s in stages.items()}
+    oof = {n: s["oof"] for n, s in stages.items()} | {
+        "iss15_sensed_only": integrated,
+        "iss15_measured": measured["age_sent"],
+        "iss15_measured_sensed_only": measured["sensed_only"],
+    }
     return RiskFit(artifact=doc, figures=figures, oof=oof, data=d)
 
 
@@ -395,14 +433,31 @@ def crash_folds_cached(d: RiskData, cfg: RiskConfig) -> list[tuple[IntArray, Int
     return crash_folds(d.crash, cfg.n_splits, cfg.seed)
 
 
+def _oof_threshold_flags(
+    y: FloatArray, p: FloatArray, folds: Sequence[tuple[IntArray, IntArray]], target: float
+) -> np.ndarray:
+    """Flags of each fold at the threshold set on the other folds' held-out predictions."""
+    flags = np.zeros(y.size, dtype=bool)
+    for tr, te in folds:
+        flags[te] = p[te] >= threshold_for_sensitivity(y[tr], p[tr], target)
+    return flags
+
+
 def _iss_extras(
     d: RiskData,
     stage: dict[str, Any],
     folds: Sequence[tuple[IntArray, IntArray]],
     resamples: Sequence[IntArray],
     cfg: RiskConfig,
+    nested: bool = True,
 ) -> dict[str, Any]:
-    """ISS 15+ only: subgroups, comparisons, operating points, the vehicle answer."""
+    """ISS 15+ only: subgroups, comparisons, operating points, the vehicle answer.
+
+    With `nested` False (a decision-only refit, :mod:`.risk_decision`), each
+    fold's held-out flags use the threshold set on the other folds' held-out
+    predictions (not refitted inside each training part), and the temporal
+    check's threshold is set on the held-out predictions of the years it fits.
+    """
     y, w, p, spec = d.outcomes[0].y, d.w, stage["oof"], stage["spec"]
     out: dict[str, Any] = {}
     out["subgroups"] = {
@@ -428,10 +483,14 @@ def _iss_extras(
     for name, req in (("sens85", cfg.sensitivity), ("acs_cot", cfg.acs_cot_sensitivity)):
         target = target_with_margin(req, float(y.sum()))
         t = threshold_for_sensitivity(y, p, target)
-        flags = _heldout_operating_point(d, y, spec, folds, target, cfg)
         te, pt = stage["temporal_rows"], stage["temporal_p"]
         tr = np.flatnonzero(d.year <= cfg.temporal_cut)
-        t_tr = _inner_threshold(d, y, spec, tr, target, cfg)
+        if nested:
+            flags = _heldout_operating_point(d, y, spec, folds, target, cfg)
+            t_tr = _inner_threshold(d, y, spec, tr, target, cfg)
+        else:
+            flags = _oof_threshold_flags(y, p, folds, target)
+            t_tr = threshold_for_sensitivity(y[tr], p[tr], target)
         old_target = target_with_margin(req, float(y.sum()) / cfg.n_splits)
         t_old = threshold_for_sensitivity(y, p, old_target)
         points[name] = {
@@ -447,6 +506,7 @@ def _iss_extras(
                 y[te], pt >= t_tr, w[te], crash_resamples(d.crash[te], cfg.n_metric_bootstrap, 5)
             ),
             "temporal_threshold": t_tr,
+            "threshold_method": "nested" if nested else "other_folds_heldout",
         }
     out["operating_points"] = points
     # the vehicle answer
@@ -473,7 +533,7 @@ def kmh_to_mph_array(d: RiskData) -> FloatArray:
 def _boosted_doc(f: BoostedFitted) -> dict[str, Any]:
     return {
         "kind": "boosted",
-        "trees": f.bag.to_document(ALL_COLUMNS_2),
+        "trees": f.bag.to_document(ALL_COLUMNS_3),
         "trees_per_member": f.n_trees,
         "calibration": list(f.calibration),
     }
@@ -483,7 +543,7 @@ def _logistic_doc(f: Fitted, boot: tuple[FloatArray, FloatArray]) -> dict[str, A
     betas, cals = boot
     return {
         "kind": "logistic",
-        "columns": [ALL_COLUMNS_2[i] for i in f.columns],
+        "columns": [ALL_COLUMNS_3[i] for i in f.columns],
         "coefficients": f.beta.tolist(),
         "calibration": list(f.calibration),
         "bootstrap_coefficients": betas.tolist(),
@@ -499,10 +559,18 @@ def _document(
     stages: dict[str, dict[str, Any]],
     extras: dict[str, Any],
     boot: dict[str, tuple[FloatArray, FloatArray]],
+    carried: dict[str, dict[str, Any]] | None = None,
 ) -> dict[str, Any]:
-    """The artifact document (figures included), its content checksum last."""
+    """The artifact document (figures included), its content checksum last.
+
+    `carried`: outcome documents taken as they are from an earlier artifact
+    (a decision-only refit carries the region models, :mod:`.risk_decision`).
+    """
     outcomes_doc = {}
     for o in d.outcomes:
+        if carried is not None and o.name in carried:
+            outcomes_doc[o.name] = carried[o.name]
+            continue
         st = stages[o.name]
         spec: Spec = st["spec"]
         f = fit_spec(d, o.y, np.arange(o.y.size), spec, cfg)
@@ -540,6 +608,11 @@ def _document(
                 + (" (ACS-COT: under-triage <= 5 %)" if name == "acs_cot" else "")
             ),
             "threshold": pt["threshold"],
+            "thresholds_by_knowledge": {
+                k: v["threshold"]
+                for part in ("knowledge", "measured")
+                for k, v in extras[part]["thresholds_by_knowledge"][name].items()
+            },
             "figures": _round({k: v for k, v in pt.items() if k != "threshold"}),
         }
         for name, pt in extras["operating_points"].items()
@@ -549,7 +622,7 @@ def _document(
         "model": {"name": MODEL_NAME, "version": MODEL_VERSION},
         "outcome": OUTCOME,
         "feature_code_sha256": feature_code_sha256(),
-        "candidate_columns": list(ALL_COLUMNS_2),
+        "candidate_columns": list(ALL_COLUMNS_3),
         "imputation": asdict(d.imputation) | {"impact_count": d.impact_count_imputed},
         "data": {
             "file": OCCUPANTS_CSV.name,
@@ -573,6 +646,20 @@ def _document(
             "heldout": _round(extras["vehicle"]),
         },
         "operating_points": points,
+        "unknowns": {
+            "donors": donor_table_of(d, np.arange(d.x.shape[0])).to_document(),
+            "figures": _round(extras["knowledge"]),
+        },
+        "measurement_model": {
+            "name": MEASUREMENT_MODEL.name,
+            "version": MEASUREMENT_MODEL.version,
+            "era_ratios": list(ERA_RATIOS),
+            "late_era_first_year": LATE_ERA_FIRST_YEAR,
+            "early_era_share": EARLY_ERA_SHARE,
+            "sd_kmh": SD_KMH,
+            "quadrature_points": QUADRATURE_POINTS,
+            "figures": _round(extras["measured"]),
+        },
         "default_operating_point": "sens85",
         "comparisons": _round(
             {k: extras[k] for k in ("boosted", "legacy_2_0_0", "nhtsa_mais3_curve")}

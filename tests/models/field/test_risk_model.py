@@ -15,13 +15,18 @@ import numpy as np
 import pandas as pd
 import pytest
 
+from models.field.risk_children import (
+    ALL_COLUMNS_3,
+    ChildRiskInputs,
+    Restraint,
+    design_columns_3,
+)
 from models.field.risk_features import (
     AirbagCode,
     RiskInputs,
     SeatSide,
     rcs_basis,
 )
-from models.field.risk_impacts import ALL_COLUMNS_2, ImpactRiskInputs, design_columns_2
 from models.field.risk_model import (
     OUTCOME,
     REGION_NAMES,
@@ -60,8 +65,8 @@ def _driver(dv: float, **kw: object) -> RiskInputs:
 def test_the_shipped_artifact_loads_with_every_outcome(model: RiskModel) -> None:
     assert model.outcome == OUTCOME == "ISS15+"
     assert model.name == "field_iss15"
-    assert model.version == "3.2.0"
-    assert model.candidate_columns == ALL_COLUMNS_2
+    assert model.version == "3.3.0"
+    assert model.candidate_columns == ALL_COLUMNS_3
     assert set(model.regions) == set(REGION_NAMES)
     assert model.default_operating_point == "sens85"
     assert set(model.thresholds) == {"sens85", "acs_cot"}
@@ -215,7 +220,7 @@ def _as_inputs(rows: pd.DataFrame) -> list[RiskInputs]:
             return None if pd.isna(v) else float(v)
 
         out.append(
-            ImpactRiskInputs(
+            ChildRiskInputs(
                 delta_v_kmh=float(r["delta_v_kmh"]),
                 pdof_deg=float(pdof[i]),
                 seat_row=int(r["seat_row"]),
@@ -232,9 +237,19 @@ def _as_inputs(rows: pd.DataFrame) -> list[RiskInputs]:
                 mass_kg=opt(r["mass_kg"]),
                 model_year=None if pd.isna(r["model_year"]) else int(r["model_year"]),
                 impact_count=int(r["n_events"]),
+                restraint=Restraint(r["belt"]),
             )
         )
     return out
+
+
+def _known(data) -> np.ndarray:  # type: ignore[no-untyped-def]
+    """Rows whose occupant inputs are all known (the others are integrated over when served,
+    while the fit's rows take the age band's medians)."""
+    rows = data.rows
+    return np.flatnonzero(
+        (rows[["age_years", "female", "stature_cm", "mass_kg"]].notna().all(axis=1)).to_numpy()
+    )
 
 
 def test_the_served_probability_is_the_fits_prediction(model: RiskModel, data) -> None:  # type: ignore[no-untyped-def]
@@ -250,10 +265,10 @@ def test_the_served_probability_is_the_fits_prediction(model: RiskModel, data) -
     if cfg.subsample < 1.0:
         pytest.skip("a reduced artifact: the data differ")
     rng = np.random.default_rng(3)
-    pick = rng.choice(len(data.rows), 300, replace=False)
+    pick = rng.choice(_known(data), 300, replace=False)
     served = model.predict_many(_as_inputs(data.rows.iloc[pick]))
     x = data.x[pick].copy()
-    x[:, ALL_COLUMNS_2.index("accident_year")] = model.imputation.accident_year
+    x[:, ALL_COLUMNS_3.index("accident_year")] = model.imputation.accident_year
     refitted = 0
     for name in ("iss15", *(f"region_{r}" for r in REGION_NAMES)):
         om = model.decision if name == "iss15" else model.regions[name.removeprefix("region_")]
@@ -288,10 +303,10 @@ def test_the_served_probability_is_the_fits_prediction(model: RiskModel, data) -
 
 
 def test_data_and_notification_paths_build_the_same_design(model: RiskModel, data) -> None:  # type: ignore[no-untyped-def]
-    rows = data.rows.iloc[:500]
-    from_data = design_columns_2(risk_arrays(rows, model.imputation))  # type: ignore[arg-type]
+    rows = data.rows.iloc[_known(data)[:500]]
+    from_data = design_columns_3(risk_arrays(rows, model.imputation))  # type: ignore[arg-type]
     from_inputs, _ = model.design(_as_inputs(rows))
-    year = ALL_COLUMNS_2.index("accident_year")
-    keep = [i for i in range(len(ALL_COLUMNS_2)) if i != year]
+    year = ALL_COLUMNS_3.index("accident_year")
+    keep = [i for i in range(len(ALL_COLUMNS_3)) if i != year]
     assert np.allclose(from_data[:, keep], from_inputs[:, keep])
     assert np.all(from_inputs[:, year] == model.imputation.accident_year)

@@ -16,6 +16,7 @@ import pandas as pd
 import pytest
 import statsmodels.api as sm
 
+from models.field.measurement import EARLY_ERA_SHARE, LATE_ERA_FIRST_YEAR
 from models.offline.field.occupants import (
     ISS15_PLUS,
     REGIONS,
@@ -166,9 +167,15 @@ def test_the_fitted_population_is_named_and_counted(occupants: pd.DataFrame) -> 
     pop = fit_population(occupants)
     rows = pop.rows
     assert len(rows) + sum(n for _, n in pop.removed) == len(occupants)
-    assert (rows["age_years"] >= 16).all()
+    assert rows["age_years"].notna().all()
+    assert (rows["age_years"] < 16).sum() == 6172  # the children of the nine seats
+    assert ((rows["age_years"] < 16) & (rows["iss"] >= 16)).sum() == 211
     assert set(rows["seat_row"]) == {1, 2, 3}
-    assert set(rows["belt"]) == {"belted", "none"}
+    assert set(rows["belt"]) == {"belted", "none", "child_seat"}
+    # the measurement model's era shares are the fitted population's
+    early = int((rows["year"] < LATE_ERA_FIRST_YEAR).sum())
+    assert early == 35960
+    assert early / len(rows) == pytest.approx(EARLY_ERA_SHARE, abs=5e-5)
     assert rows["iss"].notna().all()
     assert rows["delta_v_kmh"].notna().all()
 

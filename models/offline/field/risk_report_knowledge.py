@@ -1,0 +1,374 @@
+"""The model card's and README's figures by what a notification knows (children, ages unknown).
+
+From the artifact's ``unknowns.figures`` (:mod:`models.offline.field.risk_knowledge`):
+held out by crash, each figure with its interval by resampling crashes.
+Sensitivity is unweighted (the sample's ISS 15+ occupants), the weighted figure
+beside it; the flagged share is weighted (the nation's occupants), the sample's
+beside it; a calibration band applies to the point estimate and its interval is
+reported.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping
+from typing import Any
+
+__all__ = [
+    "knowledge_acceptance",
+    "knowledge_lines",
+    "measured_acceptance",
+    "measured_lines",
+    "readme_knowledge_lines",
+    "readme_measured_lines",
+]
+
+#: Subgroups shown, in order.
+_GROUPS = (
+    "children",
+    "children 0-4",
+    "children 5-9",
+    "children 10-15",
+    "children in a child seat",
+    "adults",
+    "adults 16-44",
+    "adults 45-64",
+    "adults 65+",
+)
+
+
+def _f(x: Any, nd: int = 3) -> str:
+    return "n/a" if x is None or not math.isfinite(float(x)) else f"{float(x):.{nd}f}"
+
+
+def _ci(ci: Any, nd: int = 3) -> str:
+    if not ci:
+        return ""
+    return f"[{_f(ci[0], nd)}, {_f(ci[1], nd)}]"
+
+
+def _pct(x: Any) -> str:
+    return "n/a" if x is None or not math.isfinite(float(x)) else f"{100.0 * float(x):.1f} %"
+
+
+def _pct_ci(ci: Any) -> str:
+    if not ci:
+        return ""
+    return f"[{100.0 * ci[0]:.1f}, {100.0 * ci[1]:.1f}]"
+
+
+def _fig(doc: Mapping[str, Any]) -> Mapping[str, Any]:
+    out: Mapping[str, Any] = doc["unknowns"]["figures"]
+    return out
+
+
+def _op(doc: Mapping[str, Any], know: str, group: str, op: str = "sens85") -> Mapping[str, Any]:
+    out: Mapping[str, Any] = _fig(doc)["thresholds_by_knowledge"][op][know]["figures"][group]
+    return out
+
+
+def _triage_cells(f: Mapping[str, Any]) -> str:
+    return (
+        f"{_f(f['sensitivity'], 2)} {_ci(f.get('sensitivity_ci95'), 2)} | "
+        f"{_f(f['sensitivity_weighted'], 2)} | {_pct(f['flagged_weighted'])} "
+        f"{_pct_ci(f.get('flagged_weighted_ci95'))} | {_pct(f['flagged'])} | {_f(f['ppv'], 3)}"
+    )
+
+
+def knowledge_lines(doc: Mapping[str, Any]) -> list[str]:
+    """The card's section: children's model choice, age sent and sensed only, thresholds."""
+    fig = _fig(doc)
+    choice = fig["children_choice"]
+    lines = [
+        "Children (0-15 years) are in the fitted population with their own terms (feature set "
+        "3, `models/field/risk_children.py`: age groups 0-4, 5-9, 10-15 and a child seat; a "
+        "child seat counts as restrained). Cross-validation by crash (the same folds), on the "
+        "children held out:",
+        "",
+        "| children's model | log loss | AUC | AUC weighted | P/O weighted |",
+        "|---|---|---|---|---|",
+    ]
+    names = {
+        "shared_with_child_terms": "shared model with child terms (served)",
+        "separate_regression": "a regression of the same inputs fitted on children alone",
+        "plain_regression_on_children": "plain logistic regression fitted on children",
+    }
+    for key, label in names.items():
+        c = choice[key]
+        lines.append(
+            f"| {label} | {_f(c['log_loss'], 4)} | {_f(c['auc'])} | {_f(c['auc_weighted'])} | "
+            f"{_f(c['p_over_o_weighted'], 2)} |"
+        )
+    lines += [
+        "",
+        f"Chosen by the held-out log loss: **{choice['chosen'].replace('_', ' ')}**"
+        + (
+            "."
+            if choice["chosen"] == "shared_with_child_terms"
+            else " (not served: the shared model is served; the card says so as a limit)."
+        ),
+        "",
+        "**What a car senses.** A telematics unit rarely knows an occupant's age, sex, stature "
+        "or mass. The service then answers the average over such occupants of the same seat "
+        "(and restraint) in the fitted population (`models/field/unknowns.py`: a donor table of "
+        "the population drawn by national weight), not the probability at the median age. "
+        "Held out by crash, each fold's model with donors of its own training part "
+        "(`sensed only`), beside the same occupants with their age, sex, stature and mass sent "
+        "(`age sent`):",
+        "",
+        "| occupants | n (ISS 15+) | AUC age sent | AUC sensed only | P/O weighted age sent | "
+        "P/O weighted sensed only |",
+        "|---|---|---|---|---|---|",
+    ]
+    for g in _GROUPS:
+        a, s = fig["age_sent"].get(g), fig["sensed_only"].get(g)
+        if a is None or s is None:
+            continue
+        lines.append(
+            f"| {g} | {a['n']:,} ({a['positives']:,}) | {_f(a['auc'])} {_ci(a.get('auc_ci95'))} | "
+            f"{_f(s['auc'])} {_ci(s.get('auc_ci95'))} | {_f(a['p_over_o_weighted'], 2)} "
+            f"{_ci(a.get('p_over_o_weighted_ci95'), 2)} | {_f(s['p_over_o_weighted'], 2)} "
+            f"{_ci(s.get('p_over_o_weighted_ci95'), 2)} |"
+        )
+    lines += [
+        "",
+        "Without the age, the answer cannot tell the old from the young: it is calibrated for "
+        "the occupants of a seat as a whole, and within an age group it is what the seat's "
+        "average risk is (the old, whose risk is highest, are under-predicted; the young "
+        "over-predicted). Only the age itself (or an input that carries it) can close that gap.",
+        "",
+        "**Thresholds by what is known.** Each operating point's threshold is set for adults "
+        "with their age, for children with their age, and for ages unknown, each on its own "
+        "held-out probabilities with the margin of one binomial standard error, so that the "
+        "operating point's promise holds for the information at hand; the service decides each "
+        "occupant at the threshold of what it knew and returns it (`triage.threshold`, "
+        "`triage.knowledge`). Held out (the threshold's own held-out sample); sensitivity "
+        "unweighted with the weighted figure beside it:",
+        "",
+        "| operating point | known | threshold | occupants | sensitivity [95 % CI] | "
+        "sensitivity weighted | flagged weighted [95 % CI] | flagged (sample) | PPV (sample) |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    by = fig["thresholds_by_knowledge"]
+    for op in ("sens85", "acs_cot"):
+        for know in ("adult", "child", "age_unknown"):
+            entry = by[op][know]
+            shown = {
+                "adult": ("adults",),
+                "child": ("children", "children 0-4", "children 5-9", "children 10-15"),
+                "age_unknown": ("everyone", "adults", "adults 65+", "children"),
+            }[know]
+            for g in shown:
+                f = entry["figures"].get(g)
+                if f is None:
+                    continue
+                lines.append(
+                    f"| `{op}` | {know.replace('_', ' ')} | {_f(entry['threshold'], 4)} | {g} | "
+                    f"{_triage_cells(f)} |"
+                )
+    return lines
+
+
+def knowledge_acceptance(doc: Mapping[str, Any]) -> list[tuple[str, bool, str]]:
+    """The children's and the sensed-only acceptance items, measured."""
+    fig = _fig(doc)
+    choice = fig["children_choice"]
+    out = []
+    served = choice["shared_with_child_terms"]
+    plain = choice["plain_regression_on_children"]
+    out.append(
+        (
+            "children: AUC at least the plain regression fitted on children",
+            served["auc"] >= plain["auc"],
+            f"{_f(served['auc'], 4)} vs {_f(plain['auc'], 4)}",
+        )
+    )
+    for g in ("children", "children 0-4", "children 5-9", "children 10-15"):
+        s = fig["age_sent"][g]
+        po = s["p_over_o_weighted"]
+        out.append(
+            (
+                f"{g}: weighted P/O 0.8-1.25",
+                0.8 <= po <= 1.25,
+                f"{_f(po, 2)} {_ci(s.get('p_over_o_weighted_ci95'), 2)}",
+            )
+        )
+    c = _op(doc, "child", "children")
+    out.append(
+        (
+            "children, `sens85`: sensitivity >= 0.85 with <= 8 % of the weighted children flagged",
+            c["sensitivity"] >= 0.85 and c["flagged_weighted"] <= 0.08,
+            f"{_f(c['sensitivity'], 3)} (weighted {_f(c['sensitivity_weighted'], 3)}), "
+            f"{100.0 * c['flagged_weighted']:.2f} % flagged",
+        )
+    )
+    a = _op(doc, "age_unknown", "adults")
+    out.append(
+        (
+            "adults sensed only, `sens85`: sensitivity >= 0.85 with <= 14 % of the weighted "
+            "population flagged",
+            a["sensitivity"] >= 0.85 and a["flagged_weighted"] <= 0.14,
+            f"{_f(a['sensitivity'], 3)} (weighted {_f(a['sensitivity_weighted'], 3)}), "
+            f"{100.0 * a['flagged_weighted']:.2f} % flagged",
+        )
+    )
+    for g in ("adults", "adults 65+"):
+        s = fig["sensed_only"][g]
+        po = s["p_over_o_weighted"]
+        out.append(
+            (
+                f"{g} sensed only: weighted P/O 0.8-1.25",
+                0.8 <= po <= 1.25,
+                f"{_f(po, 2)} {_ci(s.get('p_over_o_weighted_ci95'), 2)}",
+            )
+        )
+    return out
+
+
+def readme_knowledge_lines(doc: Mapping[str, Any]) -> list[str]:
+    """The README's lines: children and adults sent with only what the car senses."""
+    fig = _fig(doc)
+    ch, ad = fig["age_sent"]["children"], fig["sensed_only"]["adults"]
+    old = fig["sensed_only"]["adults 65+"]
+    c = _op(doc, "child", "children")
+    u = _op(doc, "age_unknown", "adults")
+    plain = fig["children_choice"]["plain_regression_on_children"]
+    return [
+        f"Children (0-15, age sent; {ch['n']:,} held out, {ch['positives']:,} ISS 15+): AUC "
+        f"{_f(ch['auc'])} {_ci(ch.get('auc_ci95'))} (a plain regression fitted on children: "
+        f"{_f(plain['auc'])}), weighted predicted/observed {_f(ch['p_over_o_weighted'], 2)} "
+        f"{_ci(ch.get('p_over_o_weighted_ci95'), 2)}; at `sens85` (their own threshold): "
+        f"sensitivity {_f(c['sensitivity'], 2)} {_ci(c.get('sensitivity_ci95'), 2)} (weighted "
+        f"{_f(c['sensitivity_weighted'], 2)}) with {_pct(c['flagged_weighted'])} "
+        f"{_pct_ci(c.get('flagged_weighted_ci95'))} of the weighted children flagged. Adults "
+        "sent with only what the car senses (no age, sex, stature or mass: integrated over, "
+        f"not imputed): AUC {_f(ad['auc'])} {_ci(ad.get('auc_ci95'))}, weighted "
+        f"predicted/observed {_f(ad['p_over_o_weighted'], 2)} "
+        f"{_ci(ad.get('p_over_o_weighted_ci95'), 2)} (65+: {_f(old['p_over_o_weighted'], 2)} "
+        f"{_ci(old.get('p_over_o_weighted_ci95'), 2)}: without the age the old cannot be told "
+        f"apart); at `sens85` (the threshold for ages unknown): sensitivity "
+        f"{_f(u['sensitivity'], 2)} {_ci(u.get('sensitivity_ci95'), 2)} (weighted "
+        f"{_f(u['sensitivity_weighted'], 2)}) with {_pct(u['flagged_weighted'])} "
+        f"{_pct_ci(u.get('flagged_weighted_ci95'))} flagged.",
+    ]
+
+
+def measured_lines(doc: Mapping[str, Any]) -> list[str]:
+    """The card's section on measured delta-V (artifacts with a measurement model)."""
+    mm = doc["measurement_model"]
+    fig = mm["figures"]
+    rec = _fig(doc)
+    lines = [
+        f"A notification carries the delta-V the vehicle measured; the data's is reconstructed "
+        f"from crush. The delta-V measurement model `{mm['name']}@{mm['version']}` "
+        "(`models/field/measurement.py`, every coefficient with its source) reads a measured "
+        "value as the reconstructions it allows: reconstructed = f x measured + N(0, "
+        f"{mm['sd_kmh']:g} km/h), f = {mm['era_ratios'][0]:g} for accident years before "
+        f"{mm['late_era_first_year']} (Niehoff & Gabler 2006: WinSMASH 23 % under the EDR) and "
+        f"{mm['era_ratios'][1]:g} from then on (19 % under, n = 228), mixed with the fitted "
+        f"population's shares ({100.0 * mm['early_era_share']:.1f} % early); the decided "
+        f"probability is the average over them ({mm['quadrature_points']} Gauss-Hermite points "
+        "per era). The reconstruction is the noisier of the two readings (Part 563: the EDR "
+        f"within +/-10 %; the reconstruction scatters by {mm['sd_kmh']:g} km/h around it), so "
+        "this corrects the mean (a measured value reads about a fifth higher) and leaves the "
+        "answer, if anything, too flat in delta-V.",
+        "",
+        "**Consistency check, not a validation.** Held out by crash, each occupant's delta-V "
+        "drawn as a vehicle would have measured it (the measurement model with its scatter, "
+        "its own year's era; measured / reconstructed weighted mean "
+        f"{_f(fig['measured_over_reconstructed_weighted'], 2)}) and read back as served: the "
+        "figures pass through the model they check.",
+        "",
+        "| occupants | AUC reconstructed | AUC measured | P/O weighted reconstructed | "
+        "P/O weighted measured |",
+        "|---|---|---|---|---|",
+    ]
+    for part, label in (("age_sent", "age sent"), ("sensed_only", "sensed only")):
+        for g in ("children", "adults", "adults 65+"):
+            a, m = rec[part].get(g), fig[part].get(g)
+            if a is None or m is None:
+                continue
+            lines.append(
+                f"| {g}, {label} | {_f(a['auc'])} | {_f(m['auc'])} {_ci(m.get('auc_ci95'))} | "
+                f"{_f(a['p_over_o_weighted'], 2)} | {_f(m['p_over_o_weighted'], 2)} "
+                f"{_ci(m.get('p_over_o_weighted_ci95'), 2)} |"
+            )
+    lines += [
+        "",
+        "Thresholds for a measured delta-V (each operating point's promise for the condition of "
+        "use), beside the reconstructed ones:",
+        "",
+        "| operating point | known | threshold | occupants | sensitivity [95 % CI] | "
+        "sensitivity weighted | flagged weighted [95 % CI] | flagged (sample) | PPV (sample) |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    for op in ("sens85", "acs_cot"):
+        for know in ("adult_measured", "child_measured", "age_unknown_measured"):
+            entry = fig["thresholds_by_knowledge"][op][know]
+            shown = {
+                "adult_measured": ("adults",),
+                "child_measured": ("children",),
+                "age_unknown_measured": ("everyone", "adults"),
+            }[know]
+            for g in shown:
+                f = entry["figures"].get(g)
+                if f is not None:
+                    lines.append(
+                        f"| `{op}` | {know.replace('_', ' ')} | {_f(entry['threshold'], 4)} | "
+                        f"{g} | {_triage_cells(f)} |"
+                    )
+    a = _op(doc, "adult", "adults")
+    m = fig["thresholds_by_knowledge"]["sens85"]["adult_measured"]["figures"]["adults"]
+    lines += [
+        "",
+        "What the scatter costs at `sens85` (adults, age sent): "
+        f"{_pct(m['flagged_weighted'])} of the weighted population flagged for a measured "
+        f"delta-V, beside {_pct(a['flagged_weighted'])} for the reconstructed one, at the same "
+        "sensitivity promise.",
+    ]
+    return lines
+
+
+def measured_acceptance(doc: Mapping[str, Any]) -> list[tuple[str, bool, str]]:
+    """The measured delta-V's acceptance items, measured (a consistency check)."""
+    fig = doc["measurement_model"]["figures"]
+    out = []
+    for g in ("adults", "children"):
+        s = fig["age_sent"][g]
+        po = s["p_over_o_weighted"]
+        out.append(
+            (
+                f"measured delta-V, {g} (age sent): weighted P/O 0.8-1.25",
+                0.8 <= po <= 1.25,
+                f"{_f(po, 2)} {_ci(s.get('p_over_o_weighted_ci95'), 2)}",
+            )
+        )
+    m = fig["thresholds_by_knowledge"]["sens85"]["adult_measured"]["figures"]["adults"]
+    out.append(
+        (
+            "measured delta-V, adults, `sens85`: sensitivity >= 0.85",
+            m["sensitivity"] >= 0.85,
+            f"{_f(m['sensitivity'], 3)} (weighted {_f(m['sensitivity_weighted'], 3)}), "
+            f"{100.0 * m['flagged_weighted']:.2f} % flagged",
+        )
+    )
+    return out
+
+
+def readme_measured_lines(doc: Mapping[str, Any]) -> list[str]:
+    """The README's lines on measured delta-V."""
+    mm = doc["measurement_model"]
+    fig = mm["figures"]
+    a, m = fig["age_sent"]["adults"], fig["thresholds_by_knowledge"]["sens85"]
+    madult = m["adult_measured"]["figures"]["adults"]
+    rec = _op(doc, "adult", "adults")
+    return [
+        f"Measured delta-V (what a vehicle sends), read through `{mm['name']}@{mm['version']}`; "
+        "held out, each delta-V drawn as a vehicle would have measured it (a consistency "
+        "check, not a validation: the figures pass through the model they check): adults, "
+        f"AUC {_f(a['auc'])}, weighted predicted/observed {_f(a['p_over_o_weighted'], 2)} "
+        f"{_ci(a.get('p_over_o_weighted_ci95'), 2)}; at `sens85` sensitivity "
+        f"{_f(madult['sensitivity'], 2)} (weighted {_f(madult['sensitivity_weighted'], 2)}) "
+        f"with {_pct(madult['flagged_weighted'])} flagged (reconstructed: "
+        f"{_pct(rec['flagged_weighted'])}).",
+    ]
