@@ -15,6 +15,7 @@ from models.notification import (
     Seat,
 )
 from models.pulse import ProcessedPulse
+from models.tiers import Tier
 
 __all__ = [
     "LPM_OUTCOME",
@@ -77,13 +78,16 @@ class TriageDecision:
     Attributes
     ----------
     iss15_plus : bool
-        Positive: likely ISS 15+, transport to a Level I trauma center.
+        Positive: ``probability >= threshold`` (the operating point's), a telemetry
+        indication of ISS 15+.
     probability : float
         Probability of `outcome`.
     probability_ci95 : (float, float)
     threshold : float
         Positive when ``probability >= threshold``.
     recommendation : str
+        The words of the tier (:mod:`models.tiers`); for a second opinion, the
+        words of a positive or negative telemetry indication.
     outcome : str
         What `probability` is a probability of (``ISS15+`` for the field risk
         model 3.0.0 on and the occupant models, ``MAIS3+`` for field model 2.0.0,
@@ -92,6 +96,11 @@ class TriageDecision:
         Name of the model that gave it.
     operating_point : str or None
         The named operating point the threshold belongs to (field model).
+    tier : Tier or None
+        The field decision's risk tier; None for the second opinions (tiers belong
+        to the field decision only).
+    high_threshold : float or None
+        The high-risk threshold the tier was set with (field decision only).
     """
 
     iss15_plus: bool
@@ -102,6 +111,8 @@ class TriageDecision:
     outcome: str = LPM_OUTCOME
     model: str = "occupant_models"
     operating_point: str | None = None
+    tier: Tier | None = None
+    high_threshold: float | None = None
 
 
 @dataclass(frozen=True)
@@ -182,6 +193,12 @@ class VehicleRiskAnswer:
     model : str
         ``name@version``.
     outcome : str
+    tier : Tier or None
+        Its own risk tier, from its own probability against the occupants' operating
+        threshold and the high-risk threshold (the vehicle is the unit of the CDC
+        panel's 20 % and of OnStar's published prediction).
+    threshold, high_threshold : float or None
+        The thresholds `tier` was set with.
     """
 
     probability: float
@@ -189,6 +206,9 @@ class VehicleRiskAnswer:
     heldout_auc: float
     model: str
     outcome: str = "anyone ISS15+"
+    tier: Tier | None = None
+    threshold: float | None = None
+    high_threshold: float | None = None
 
 
 @dataclass(frozen=True)
