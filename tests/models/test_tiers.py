@@ -194,10 +194,12 @@ def test_the_case_takes_the_worst_occupants_tier_and_the_vehicle_its_own(
     crash = dataclasses.replace(_crash(60.0), occupants=(low, high))
     result = triage(crash, models)
     tiers = [o.triage.tier for o in result.occupants]
-    assert tiers[1] is Tier.HIGH and tiers[0] is not Tier.HIGH, tiers
+    assert tiers[1] is Tier.HIGH, tiers
+    assert tiers[0] is not Tier.HIGH, tiers
     assert result.triage == result.occupants[1].triage
     v = result.vehicle
-    assert v is not None and v.probability >= result.triage.probability
+    assert v is not None
+    assert v.probability >= result.triage.probability
     assert v.tier is Tier.HIGH
 
 
