@@ -239,7 +239,7 @@ def _tier_lines(example: Mapping[str, Any]) -> list[str]:
     high = tiers["high"]
     lines += [
         "",
-        "The high and none notifications, to POST as in \"Try it\":",
+        'The high and none notifications, to POST as in "Try it":',
         "",
         "```json",
         *(json.dumps(TIER_EXAMPLES[t], separators=(", ", ": ")) for t in ("high", "none")),
