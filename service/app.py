@@ -12,6 +12,7 @@ from fastapi import FastAPI
 from fastapi.staticfiles import StaticFiles
 from starlette.responses import Response
 
+from models.triage import ThresholdOrderError
 from service import __version__, health, session_secret
 from service.auth import caller_of_row
 from service.balance import ConnectionBalance, WorkerLoads
@@ -58,7 +59,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
 
     The lifespan migrates the database (when `auto_migrate`), loads and verifies
     the models, and warms the engine. A model that fails to load leaves the
-    service alive but not ready (/readyz says why).
+    service alive but not ready (/readyz says why); a high-risk threshold below an
+    operating threshold in use stops the start (ThresholdOrderError).
     """
     settings = settings or get_settings()
     metrics = Metrics()
@@ -74,6 +76,10 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         error = None
         try:
             models = engine_models_for(settings)
+        except ThresholdOrderError:
+            # a high-risk tier below the flagged cannot be answered in: refuse to start
+            db_engine.dispose()
+            raise
         except Exception as exc:  # reported by /readyz, the service stays alive
             error = f"{type(exc).__name__}: {exc}"
             log.error("models failed to load: %s", error)

@@ -11,7 +11,8 @@ from sqlalchemy import Engine
 from sqlalchemy.orm import Session, sessionmaker
 
 from models.field.model import WITHDRAWN_VERSIONS
-from models.triage import EngineModels, load_engine_models
+from models.tiers import check_threshold_order
+from models.triage import EngineModels, load_engine_models, operating_thresholds
 from service.db.spool import Spool
 from service.key_cache import KeyStates
 from service.metrics import Metrics
@@ -24,7 +25,12 @@ log = logging.getLogger("aacn_triage.store")
 #: server that restarted, is never reused); once a second is plenty under load.
 POOL_RESET_MIN_INTERVAL_S = 1.0
 
-__all__ = ["ServiceContext", "engine_models_for", "limit_blas_threads"]
+__all__ = [
+    "ServiceContext",
+    "check_high_risk_threshold",
+    "engine_models_for",
+    "limit_blas_threads",
+]
 
 
 def limit_blas_threads(threads: int) -> None:
@@ -53,6 +59,7 @@ def engine_models_for(settings: Settings) -> EngineModels:
     models = load_engine_models(
         threshold_override=settings.triage_threshold,
         operating_point=settings.operating_point,
+        high_threshold=settings.high_risk_threshold,
         field_artifact=settings.field_artifact,
         posture_sd_deg=settings.posture_sd_deg,
         seat_track_sd_mm=settings.seat_track_sd_mm,
@@ -71,6 +78,34 @@ def engine_models_for(settings: Settings) -> EngineModels:
             "replay past decisions"
         )
     return models
+
+
+def check_high_risk_threshold(settings: Settings) -> None:
+    """Refuse a high-risk threshold below an operating threshold in use, before a start.
+
+    Loads the configured field artifact alone (about a second). Raises
+    ``models.triage.ThresholdOrderError``; any other fault of the artifact or the
+    operating point is left to the start, which reports it (/readyz).
+    """
+    from models.field.risk_model import load_default as load_field_model
+    from models.field.versions import load_field_artifact
+
+    try:
+        field = (
+            load_field_model()
+            if settings.field_artifact is None
+            else load_field_artifact(settings.field_artifact)
+        )
+    except Exception:  # reported by the start itself
+        return
+    if settings.operating_point is not None and settings.operating_point not in (
+        field.operating_points
+    ):
+        return
+    check_threshold_order(
+        settings.high_risk_threshold,
+        operating_thresholds(field, settings.operating_point, settings.triage_threshold),
+    )
 
 
 @dataclass

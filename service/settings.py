@@ -6,10 +6,11 @@ from functools import lru_cache
 from pathlib import Path
 from typing import Literal
 
-from pydantic import Field, SecretStr
+from pydantic import Field, SecretStr, model_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
 from models.constants import DEFAULT_POSTURE_SD_DEG, DEFAULT_SEAT_TRACK_SD_MM
+from models.tiers import HIGH_RISK_THRESHOLD
 
 __all__ = ["Settings", "get_settings"]
 
@@ -43,6 +44,15 @@ class Settings(BaseSettings):
         lt=1.0,
         description="Override of the decision threshold on the field model's P(MAIS 3+), for "
         "every crash mode; None uses the operating point's thresholds.",
+    )
+    high_risk_threshold: float = Field(
+        default=HIGH_RISK_THRESHOLD,
+        gt=0.0,
+        lt=1.0,
+        description="The high-risk tier's threshold on the field model's P(ISS 15+): at or "
+        "above it (and the operating threshold) the recommendation is the highest-level "
+        "trauma center in reach. Default 0.20, the CDC 2008 expert panel's 'high risk of "
+        "severe injury'. Below an operating threshold in use, the service refuses to start.",
     )
     operating_point: str | None = Field(
         default=None,
@@ -176,6 +186,18 @@ class Settings(BaseSettings):
         pattern=r"^[0-9]{2}$",
         description="NEMSIS dAgency.04, the two-digit ANSI code of the agency's state.",
     )
+
+    @model_validator(mode="after")
+    def _high_tier_within_the_flagged(self) -> Settings:
+        """The high-risk threshold may not lie below the overriding operating threshold
+        (the operating point's own are checked when the field model loads)."""
+        if self.triage_threshold is not None and self.high_risk_threshold < self.triage_threshold:
+            raise ValueError(
+                f"high_risk_threshold {self.high_risk_threshold} (AACN_HIGH_RISK_THRESHOLD) "
+                f"lies below triage_threshold {self.triage_threshold} (AACN_TRIAGE_THRESHOLD): "
+                "the high tier must lie within the flagged"
+            )
+        return self
 
     def resolved_spool_path(self) -> Path:
         """`spool_path`, or its default (see the field)."""

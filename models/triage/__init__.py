@@ -16,7 +16,10 @@ Occupants inside an occupant model's coverage are also simulated by that model
 sensor-uncertainty box. That answer explains the decision (which body regions,
 which measures) and is kept with its own decision as a second opinion, as is the
 statistical baseline's (`models.baseline`) for every occupant. The case-level
-decision is the worst occupant's.
+decision is the worst occupant's. The field decision has a risk tier in the
+field-triage guideline's terms (`models.tiers`): high (P at or above the high-risk
+threshold, 20 % by default), moderate (at or above the operating point's
+threshold), none; the vehicle's P(anyone ISS 15+) has its own.
 
 Everything here is a pure function of the notification and the loaded models:
 the same inputs and model versions give the same result, bit for bit (only
@@ -26,8 +29,9 @@ Layout (one face: import from ``models.triage``, not from its modules)::
 
     result.py          the answer's types: TriageResult, OccupantTriage, TriageDecision, ...
     loading.py         EngineModels, load_engine_models, warm_up; the triage_code checksum
-    decision.py        decide: a probability at a threshold; the field, occupant-model and
-                       baseline decisions; the case's is the worst occupant's
+    decision.py        decide: a probability at a threshold (with its tier for the field
+                       decision); the field, occupant-model and baseline decisions; the
+                       case's is the worst occupant's
     occupant_model.py  the occupant-model explanation: direct runs, injury scores, intervals
     field_evidence.py  what the field model is given per occupant (also for offline fits)
     run.py             triage: the notification -> result orchestration
@@ -39,11 +43,17 @@ field_evidence <- run; simulation beside run).
 """
 
 from models.constants import DEFAULT_POSTURE_SD_DEG, DEFAULT_SEAT_TRACK_SD_MM
+from models.tiers import (
+    HIGH_RISK_THRESHOLD,
+    RECOMMENDATIONS,
+    ThresholdOrderError,
+    Tier,
+    recommendation,
+    tier_of,
+)
 from models.triage.decision import (
     BASELINE_OUTCOME,
     LPM_THRESHOLDS,
-    RECOMMENDATION_NO_TRAUMA_INDICATION,
-    RECOMMENDATION_TRAUMA_CENTER,
     decide,
 )
 from models.triage.field_evidence import (
@@ -56,6 +66,7 @@ from models.triage.loading import (
     EngineModels,
     load_engine_models,
     load_surrogates,
+    operating_thresholds,
     triage_code_sha256,
     warm_up,
 )
@@ -70,6 +81,7 @@ from models.triage.result import (
     TriageDecision,
     TriageResult,
     UnknownVehicleModel,
+    VehicleRiskAnswer,
 )
 from models.triage.run import (
     triage,
@@ -87,8 +99,14 @@ __all__ = [
     "BASELINE_OUTCOME",
     "IntervalMethod",
     "Method",
-    "RECOMMENDATION_NO_TRAUMA_INDICATION",
-    "RECOMMENDATION_TRAUMA_CENTER",
+    "HIGH_RISK_THRESHOLD",
+    "RECOMMENDATIONS",
+    "ThresholdOrderError",
+    "Tier",
+    "VehicleRiskAnswer",
+    "operating_thresholds",
+    "recommendation",
+    "tier_of",
     "TRIAGE_SOURCES",
     "SensorInputs",
     "EngineModels",

@@ -15,31 +15,16 @@ from models.notification import (
     Occupant,
 )
 from models.pulse import ProcessedPulse
+from models.tiers import recommendation, second_opinion_recommendation, tier_of
 from models.triage.loading import EngineModels
 from models.triage.result import LPM_OUTCOME, TriageDecision
 
 __all__ = [
-    "RECOMMENDATION_TRAUMA_CENTER",
-    "RECOMMENDATION_NO_TRAUMA_INDICATION",
     "LPM_THRESHOLDS",
     "BASELINE_OUTCOME",
     "decide",
+    "decide_tiered",
 ]
-
-
-#: Words for a positive decision. CDC 2011 / ACS 2021 field triage: "vehicle
-#: telemetry data consistent with severe injury" (crash-data-and-triage.md s.4).
-RECOMMENDATION_TRAUMA_CENTER = (
-    "Transport to a Level I trauma center: vehicle telemetry consistent with severe "
-    "injury (ISS 15 or more likely)."
-)
-
-
-#: Words for a negative decision: telemetry alone does not call for a trauma center.
-RECOMMENDATION_NO_TRAUMA_INDICATION = (
-    "No telemetry indication of ISS 15 or more: destination by EMS field assessment "
-    "under local protocol."
-)
 
 
 #: Decision thresholds on the occupant models' P(ISS >= 15), per mode. Bahouth,
@@ -72,19 +57,47 @@ def decide(
     model: str = "occupant_models",
     operating_point: str | None = None,
 ) -> TriageDecision:
-    """Turn a probability into a decision at `threshold` (positive when p >= threshold)."""
+    """A second opinion's decision at `threshold` (positive when p >= threshold).
+
+    It has no tier (tiers belong to the field decision): a positive one says what a
+    telemetry indication says (:func:`models.tiers.second_opinion_recommendation`).
+    """
     positive = probability >= threshold
     return TriageDecision(
         iss15_plus=positive,
         probability=probability,
         probability_ci95=ci95,
         threshold=threshold,
-        recommendation=(
-            RECOMMENDATION_TRAUMA_CENTER if positive else RECOMMENDATION_NO_TRAUMA_INDICATION
-        ),
+        recommendation=second_opinion_recommendation(positive),
         outcome=outcome,
         model=model,
         operating_point=operating_point,
+    )
+
+
+def decide_tiered(
+    probability: float,
+    ci95: tuple[float, float],
+    threshold: float,
+    high_threshold: float,
+    *,
+    outcome: str,
+    model: str,
+    operating_point: str | None,
+) -> TriageDecision:
+    """The field decision: positive at `threshold`, with its risk tier and the tier's words."""
+    tier = tier_of(probability, threshold, high_threshold)
+    return TriageDecision(
+        iss15_plus=probability >= threshold,
+        probability=probability,
+        probability_ci95=ci95,
+        threshold=threshold,
+        recommendation=recommendation(tier),
+        outcome=outcome,
+        model=model,
+        operating_point=operating_point,
+        tier=tier,
+        high_threshold=high_threshold,
     )
 
 
@@ -121,14 +134,26 @@ def _field_decision(
         if models.threshold_override is not None
         else field_model.threshold(prediction.mode, name)
     )
-    return decide(
+    return decide_tiered(
         prediction.probability,
         prediction.ci95,
         threshold,
+        models.high_threshold,
         outcome=field_model.outcome,
         model=f"{field_model.name}@{field_model.version}",
         operating_point=None if models.threshold_override is not None else name,
     )
+
+
+def _risk_threshold(
+    risk_model: RiskModel, models: EngineModels, knowledge: str | None = None
+) -> float:
+    """The operating threshold of the field risk model for what was known of the occupant
+    (:meth:`models.field.risk_model.RiskModel.threshold`; the override where one is set)."""
+    if models.threshold_override is not None:
+        return models.threshold_override
+    name = models.operating_point or risk_model.default_operating_point
+    return risk_model.threshold(name, knowledge)
 
 
 def _risk_decision(
@@ -136,15 +161,11 @@ def _risk_decision(
 ) -> TriageDecision:
     """The decision on P(ISS 15+) of the field risk model at its operating point."""
     name = models.operating_point or risk_model.default_operating_point
-    threshold = (
-        models.threshold_override
-        if models.threshold_override is not None
-        else risk_model.threshold(name, prediction.knowledge)
-    )
-    decided = decide(
+    decided = decide_tiered(
         prediction.probability,
         prediction.ci95,
-        threshold,
+        _risk_threshold(risk_model, models, prediction.knowledge),
+        models.high_threshold,
         outcome=risk_model.outcome,
         model=f"{risk_model.name}@{risk_model.version}",
         operating_point=None if models.threshold_override is not None else name,

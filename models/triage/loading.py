@@ -32,12 +32,14 @@ from models.surrogate.evaluate import (
     evaluation_sha256,
 )
 from models.surrogate.kernels import warm_up as _warm_up_surrogates
+from models.tiers import HIGH_RISK_THRESHOLD, check_threshold_order
 from models.triage.result import ModelInfo
 
 __all__ = [
     "TRIAGE_SOURCES",
     "triage_code_sha256",
     "EngineModels",
+    "operating_thresholds",
     "load_surrogates",
     "warm_up",
     "load_engine_models",
@@ -63,6 +65,7 @@ TRIAGE_SOURCES = (
     "triage/occupant_model.py",
     "triage/field_evidence.py",
     "triage/run.py",
+    "tiers.py",
     "pulse.py",
     "pulse_plausibility.py",
     "impact_mode.py",
@@ -105,6 +108,9 @@ class EngineModels:
         Named operating point of the field model (None: the artifact's default).
     threshold_override : float or None
         Replaces the operating point's thresholds when set.
+    high_threshold : float
+        The high-risk tier's threshold on the field model's probability
+        (:mod:`models.tiers`); never below an operating threshold in use.
     posture_sd_deg, seat_track_sd_mm : float
         Sensor standard deviations used when a notification gives none.
     """
@@ -115,6 +121,7 @@ class EngineModels:
     field: AnyFieldModel | None = None
     operating_point: str | None = None
     threshold_override: float | None = None
+    high_threshold: float = HIGH_RISK_THRESHOLD
     posture_sd_deg: float = DEFAULT_POSTURE_SD_DEG
     seat_track_sd_mm: float = DEFAULT_SEAT_TRACK_SD_MM
 
@@ -167,6 +174,21 @@ class EngineModels:
         return infos
 
 
+def operating_thresholds(
+    field_model: AnyFieldModel, operating_point: str | None, threshold_override: float | None
+) -> dict[str, float]:
+    """The operating thresholds a field model decides with, by name (and crash mode where
+    they differ by mode): the override alone when one is set."""
+    if threshold_override is not None:
+        return {"AACN_TRIAGE_THRESHOLD": threshold_override}
+    name = operating_point or field_model.default_operating_point
+    point = field_model.operating_points[name]
+    if isinstance(point, float):  # the ISS 15+ risk model: one threshold per point
+        by_knowledge = getattr(field_model, "knowledge_thresholds", {}).get(name, {})
+        return {name: point} | {f"{name} ({k})": t for k, t in by_knowledge.items()}
+    return {f"{name} ({mode.value})": t for mode, t in point.thresholds.items()}
+
+
 def load_surrogates(directory: Path | None = None) -> SurrogateLibrary | None:
     """Load and verify the PCE surrogates; None when none are shipped.
 
@@ -201,6 +223,7 @@ def load_engine_models(
     threshold_override: float | None = None,
     *,
     operating_point: str | None = None,
+    high_threshold: float = HIGH_RISK_THRESHOLD,
     field_artifact: Path | None = None,
     posture_sd_deg: float = DEFAULT_POSTURE_SD_DEG,
     seat_track_sd_mm: float = DEFAULT_SEAT_TRACK_SD_MM,
@@ -216,6 +239,8 @@ def load_engine_models(
     ValueError
         When an artifact is missing, malformed, altered, or does not match the
         code, or `operating_point` is not one the field model defines.
+    ThresholdOrderError
+        (a ValueError) When `high_threshold` lies below an operating threshold in use.
     """
     field_model: AnyFieldModel | None = None
     if use_field:
@@ -230,6 +255,10 @@ def load_engine_models(
         raise ValueError(
             f"unknown operating point {operating_point!r}; the field model defines "
             + ", ".join(sorted(field_model.operating_points))
+        )
+    if field_model is not None:
+        check_threshold_order(
+            high_threshold, operating_thresholds(field_model, operating_point, threshold_override)
         )
     surrogates = load_surrogates(surrogate_dir) if use_surrogates else None
     parameter_sets = {name: load_parameter_set(name) for name in available_parameter_sets()}
@@ -247,6 +276,7 @@ def load_engine_models(
         field=field_model,
         operating_point=operating_point,
         threshold_override=threshold_override,
+        high_threshold=high_threshold,
         posture_sd_deg=posture_sd_deg,
         seat_track_sd_mm=seat_track_sd_mm,
     )

@@ -15,6 +15,7 @@ from models.notification import (
     Seat,
 )
 from models.pulse import ProcessedPulse
+from models.tiers import Tier
 
 __all__ = [
     "LPM_OUTCOME",
@@ -77,13 +78,16 @@ class TriageDecision:
     Attributes
     ----------
     iss15_plus : bool
-        Positive: likely ISS 15+, transport to a Level I trauma center.
+        Positive: ``probability >= threshold`` (the operating point's), a telemetry
+        indication of ISS 15+.
     probability : float
         Probability of `outcome`.
     probability_ci95 : (float, float)
     threshold : float
         Positive when ``probability >= threshold``.
     recommendation : str
+        The words of the tier (:mod:`models.tiers`); for a second opinion, the
+        words of a positive or negative telemetry indication.
     outcome : str
         What `probability` is a probability of (``ISS15+`` for the field risk
         model 3.0.0 on and the occupant models, ``MAIS3+`` for field model 2.0.0,
@@ -99,6 +103,11 @@ class TriageDecision:
     knowledge : str or None
         Field risk model: what was known of the occupant, which the threshold
         was set for (``adult``, ``child``, ``age_unknown``).
+    tier : Tier or None
+        The field decision's risk tier; None for the second opinions (tiers belong
+        to the field decision only).
+    high_threshold : float or None
+        The high-risk threshold the tier was set with (field decision only).
     """
 
     iss15_plus: bool
@@ -111,6 +120,8 @@ class TriageDecision:
     operating_point: str | None = None
     unknown_inputs_range95: tuple[float, float] | None = None
     knowledge: str | None = None
+    tier: Tier | None = None
+    high_threshold: float | None = None
 
 
 @dataclass(frozen=True)
@@ -191,6 +202,12 @@ class VehicleRiskAnswer:
     model : str
         ``name@version``.
     outcome : str
+    tier : Tier or None
+        Its own risk tier, from its own probability against the occupants' operating
+        threshold and the high-risk threshold (the vehicle is the unit of the CDC
+        panel's 20 % and of OnStar's published prediction).
+    threshold, high_threshold : float or None
+        The thresholds `tier` was set with.
     """
 
     probability: float
@@ -198,6 +215,9 @@ class VehicleRiskAnswer:
     heldout_auc: float
     model: str
     outcome: str = "anyone ISS15+"
+    tier: Tier | None = None
+    threshold: float | None = None
+    high_threshold: float | None = None
 
 
 @dataclass(frozen=True)

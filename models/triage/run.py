@@ -14,7 +14,8 @@ from models.notification import (
     Occupant,
 )
 from models.pulse import process_pulse
-from models.triage.decision import _field_decision, _risk_decision, _worst
+from models.tiers import tier_of
+from models.triage.decision import _field_decision, _risk_decision, _risk_threshold, _worst
 from models.triage.field_evidence import (
     OccupantEvidence,
     _field_assumptions,
@@ -75,13 +76,20 @@ def _occupant_triage(
     )
 
 
-def _vehicle_answer(model: RiskModel, predictions: list[RiskPrediction]) -> VehicleRiskAnswer:
+def _vehicle_answer(
+    model: RiskModel, models: EngineModels, predictions: list[RiskPrediction]
+) -> VehicleRiskAnswer:
+    """P(anyone ISS 15+) and its own tier, against the occupants' thresholds."""
     v = model.vehicle(predictions)
+    threshold = _risk_threshold(model, models)
     return VehicleRiskAnswer(
         probability=v.probability,
         probability_ci95=v.ci95,
         heldout_auc=model.vehicle_heldout_auc,
         model=f"{model.name}@{model.version}",
+        tier=tier_of(v.probability, threshold, models.high_threshold),
+        threshold=threshold,
+        high_threshold=models.high_threshold,
     )
 
 
@@ -168,7 +176,7 @@ def triage(notification: CrashNotification, models: EngineModels) -> TriageResul
         field_ms += 1000.0 * (time.perf_counter() - tf)
         occupants.append(answered)
     vehicle = (
-        _vehicle_answer(field_model, risk_predictions)
+        _vehicle_answer(field_model, models, risk_predictions)
         if isinstance(field_model, RiskModel)
         else None
     )

@@ -13,6 +13,7 @@ from fastapi.responses import JSONResponse
 from pydantic import ValidationError
 
 from models.impact_mode import ImpactMode
+from models.tiers import Tier
 from service.auth import require_auditor, require_submitter
 from service.cases import service as cases_service
 from service.cases.notification import CrashNotificationIn, ReceivedSource, Rfc3339Text
@@ -182,6 +183,13 @@ def list_cases(
         Query(description="Only cases received before this time (RFC 3339, with offset)."),
     ] = None,
     iss15_plus: Annotated[bool | None, Query(description="Only this case-level decision.")] = None,
+    tier: Annotated[
+        Tier | None,
+        Query(
+            description="Only this case-level risk tier (`high`, `moderate`, `none`; derived "
+            "for cases stored before tiers, with the high-risk threshold at its default)."
+        ),
+    ] = None,
     impact_mode: Annotated[
         ImpactModeFilter | None, Query(description="Only cases with an occupant in this mode.")
     ] = None,
@@ -194,5 +202,6 @@ def list_cases(
         received_before=received_before,
         iss15_plus=iss15_plus,
         impact_mode=impact_mode.value if impact_mode is not None else None,
+        tier=tier,
     )
     return cases_service.list_cases(ctx, filters, limit=page, cursor=cursor)

@@ -15,6 +15,13 @@ __all__ = [
     "EXAMPLE_VEDS",
 ]
 
+#: The moderate tier's words (``models.tiers``), as the examples below carry them.
+MODERATE_WORDS: Final[str] = (
+    "Vehicle telemetry consistent with severe injury (2021 guideline, moderate risk): "
+    "consider a trauma center, which need not be the highest level; EMS judgment and local "
+    "protocol decide."
+)
+
 #: `POST /v1/cases` answer for the "summary" example notification (the engine as shipped).
 EXAMPLE_CASE_RESULT: dict[str, Any] = {
     "case_id": "0b9e3c55-6a4f-4f3e-9a51-2f1f5d0c7e21",
@@ -25,11 +32,12 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         "probability": 0.07953,
         "probability_ci95": [0.05356, 0.1165],
         "threshold": 0.01771,
-        "recommendation": "Transport to a Level I trauma center: vehicle telemetry "
-        "consistent with severe injury (ISS 15 or more likely).",
+        "recommendation": MODERATE_WORDS,
         "outcome": "ISS15+",
         "model": "field_iss15@3.2.0",
         "operating_point": "sens85",
+        "tier": "moderate",
+        "high_threshold": 0.2,
     },
     "vehicle": {
         "probability": 0.07953,
@@ -37,6 +45,9 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         "heldout_auc": 0.8916,
         "outcome": "anyone ISS15+",
         "model": "field_iss15@3.2.0",
+        "tier": "moderate",
+        "threshold": 0.01771,
+        "high_threshold": 0.2,
     },
     "occupants": [
         {
@@ -127,12 +138,12 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
                 "probability": 0.07953,
                 "probability_ci95": [0.05356, 0.1165],
                 "threshold": 0.01771,
-                "recommendation": "Transport to a Level I trauma center: vehicle "
-                "telemetry consistent with severe injury (ISS 15 "
-                "or more likely).",
+                "recommendation": MODERATE_WORDS,
                 "outcome": "ISS15+",
                 "model": "field_iss15@3.2.0",
                 "operating_point": "sens85",
+                "tier": "moderate",
+                "high_threshold": 0.2,
             },
             "occupant_model": {
                 "iss15_plus": False,
@@ -145,18 +156,20 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
                 "outcome": "ISS15+",
                 "model": "occupant_models",
                 "operating_point": None,
+                "tier": None,
+                "high_threshold": None,
             },
             "baseline": {
                 "iss15_plus": True,
                 "probability": 0.4722,
                 "probability_ci95": [0.2666, 0.6876],
                 "threshold": 0.042,
-                "recommendation": "Transport to a Level I trauma center: vehicle "
-                "telemetry consistent with severe injury (ISS "
-                "15 or more likely).",
+                "recommendation": MODERATE_WORDS,
                 "outcome": "police_A+K",
                 "model": "nass_logistic",
                 "operating_point": None,
+                "tier": None,
+                "high_threshold": None,
             },
         }
     ],
@@ -209,7 +222,7 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         },
         "triage_code": {
             "version": "0.2.0",
-            "sha256": "176c3d0d4fbfb85c0a6921e78fbb9d57051f3f861c94c4ce93f1bc58bde1321f",
+            "sha256": "c44df47e282617ff849023a62d7951c7f27bdc7ee3ef5e7fae31e277567e9975",
         },
         "risk_calibration": {
             "version": "1",
@@ -248,6 +261,7 @@ EXAMPLE_STORED_CASE: dict[str, Any] = {
     "source_format": "json",
     "source_document": None,
     "source_mapping": None,
+    "tiers_derived": False,
 }
 
 #: `GET /v1/cases`.
@@ -259,6 +273,7 @@ EXAMPLE_CASE_LIST: dict[str, Any] = {
             "client_name": "metro-psap-telematics",
             "received_at": EXAMPLE_CASE_RESULT["received_at"],
             "iss15_plus": EXAMPLE_CASE_RESULT["triage"]["iss15_plus"],
+            "tier": EXAMPLE_CASE_RESULT["triage"]["tier"],
             "probability": EXAMPLE_CASE_RESULT["triage"]["probability"],
             "impact_modes": ["frontal"],
         }

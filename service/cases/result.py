@@ -11,13 +11,23 @@ from pydantic import (
     BaseModel,
     ConfigDict,
     Field,
+    model_validator,
 )
 
 from models import notification as engine
 from models.assumptions import DESCRIPTIONS, Assumption, AssumptionCode
 from models.field.features import FieldMode
 from models.impact_mode import ImpactMode
-from models.triage import IntervalMethod, Method, OccupantTriage, TriageDecision, TriageResult
+from models.triage import (
+    HIGH_RISK_THRESHOLD,
+    IntervalMethod,
+    Method,
+    OccupantTriage,
+    Tier,
+    TriageDecision,
+    TriageResult,
+    tier_of,
+)
 from service.cases.examples import EXAMPLE_CASE_LIST, EXAMPLE_CASE_RESULT, EXAMPLE_STORED_CASE
 from service.cases.notification import SourceFormat
 
@@ -37,8 +47,21 @@ __all__ = [
     "StoredCase",
     "CaseSummary",
     "CaseList",
+    "TIER_WORDS",
+    "derive_tiers",
     "to_case_result",
 ]
+
+
+#: What each tier means, for the descriptions of the wire fields.
+TIER_WORDS = (
+    "`high`: `probability` at or above `high_threshold` (default 0.20, the CDC 2008 expert "
+    "panel's 'high risk of severe injury') and `threshold`: the highest-level trauma center "
+    "in reach; `moderate`: at or above `threshold` (the operating point's, `iss15_plus`), "
+    "below `high_threshold`: vehicle telemetry consistent with severe injury, a moderate-risk "
+    "criterion of the 2021 field triage guideline (consider a trauma center, not necessarily "
+    "the highest level); `none`: below `threshold`, no telemetry indication."
+)
 
 
 class OutModel(BaseModel):
@@ -51,8 +74,8 @@ class TriageOut(OutModel):
     """A trauma-center decision on a probability of serious injury."""
 
     iss15_plus: bool = Field(
-        description="True: likely ISS >= 15, transport to a Level I trauma center "
-        "(`probability` >= `threshold`)."
+        description="True: `probability` >= `threshold`, a telemetry indication of ISS 15+ "
+        "(`tier` `moderate` or `high`; `tier` says which center)."
     )
     probability: float = Field(
         ge=0,
@@ -68,7 +91,10 @@ class TriageOut(OutModel):
         description="95% interval of `probability` [low, high]; it holds `probability`."
     )
     threshold: float = Field(description="Decision threshold on `probability`.")
-    recommendation: str = Field(description="What to do with the patient, in words.")
+    recommendation: str = Field(
+        description="What to do with the patient, in words: the tier's (field decision); for "
+        "a second opinion, those of a telemetry indication or of none."
+    )
     outcome: str = Field(
         description="What `probability` is a probability of: `ISS15+` (field risk model "
         "3.0.0 on, and occupant models), `MAIS3+` (field model 2.0.0, recalls), `police_A+K` "
@@ -98,6 +124,21 @@ class TriageOut(OutModel):
         "(age given, 16 or older), `child` (age given, under 16), `age_unknown`. The "
         "`threshold` is that one. Null for older models and second opinions.",
         examples=["age_unknown"],
+    )
+    tier: Tier | None = Field(
+        default=None,
+        description="Risk tier of the field decision (`triage` of a case or occupant): "
+        + TIER_WORDS
+        + " Null for the second opinions (`occupant_model`, `baseline`): tiers belong to the "
+        "field decision. A case stored before tiers is read back with the tier of its stored "
+        "probability and threshold, `high_threshold` at its default.",
+        examples=["moderate"],
+    )
+    high_threshold: float | None = Field(
+        default=None,
+        description="The high-risk threshold the tier was set with (`AACN_HIGH_RISK_THRESHOLD`, "
+        "stored with the case); null for second opinions.",
+        examples=[0.2],
     )
 
 
@@ -187,6 +228,19 @@ class VehicleRiskOut(OutModel):
     )
     outcome: str = Field(description="`anyone ISS15+`.", examples=["anyone ISS15+"])
     model: str = Field(description="The model that gave it.", examples=["field_iss15@3.2.0"])
+    tier: Tier | None = Field(
+        default=None,
+        description="The vehicle's own risk tier, from its own probability against the "
+        "occupants' `threshold` and `high_threshold` (the vehicle is the unit of the CDC "
+        "panel's 20 % and of OnStar's injury severity prediction): " + TIER_WORDS,
+        examples=["moderate"],
+    )
+    threshold: float | None = Field(
+        default=None, description="The operating threshold `tier` was set with.", examples=[0.0177]
+    )
+    high_threshold: float | None = Field(
+        default=None, description="The high-risk threshold `tier` was set with.", examples=[0.2]
+    )
 
 
 class OccupantOut(OutModel):
@@ -342,6 +396,12 @@ class CaseResult(OutModel):
         description="The case is recorded in the local spool, waiting to be stored (202).",
     )
 
+    @model_validator(mode="before")
+    @classmethod
+    def _tiers_of_a_stored_result(cls, data: Any) -> Any:
+        """A result stored before tiers is read with the tiers :func:`derive_tiers` gives."""
+        return derive_tiers(data) if isinstance(data, dict) else data
+
 
 class StoredCase(OutModel):
     """A stored case, as the audit trail holds it."""
@@ -374,6 +434,12 @@ class StoredCase(OutModel):
         description="For VEDS: which elements were mapped to which fields, what was assumed "
         "(assumption codes) and what was not used (null for JSON).",
     )
+    tiers_derived: bool = Field(
+        default=False,
+        description="True: the case was stored before risk tiers; `result` shows the tiers of "
+        "its stored probabilities and thresholds, with the high-risk threshold at its default "
+        "(0.20). The stored record itself is never altered.",
+    )
 
 
 class CaseSummary(OutModel):
@@ -384,6 +450,11 @@ class CaseSummary(OutModel):
     client_name: str = Field(description="Name of the API key that submitted it.")
     received_at: datetime = Field(description="When the notification was received.")
     iss15_plus: bool = Field(description="Case-level decision.")
+    tier: Tier = Field(
+        description="Case-level risk tier (its worst occupant's; derived for a case stored "
+        "before tiers).",
+        examples=["moderate"],
+    )
     probability: float = Field(description="Case-level probability.")
     impact_modes: list[str] = Field(description="Impact mode of each occupant.")
 
@@ -409,7 +480,54 @@ def _triage_out(d: TriageDecision) -> TriageOut:
         operating_point=d.operating_point,
         unknown_inputs_range95=d.unknown_inputs_range95,
         knowledge=d.knowledge,
+        tier=d.tier,
+        high_threshold=d.high_threshold,
     )
+
+
+def _derived(decision: Any, threshold: Any, high_threshold: float) -> Any:
+    """`decision` (a stored field decision or vehicle answer) with a tier where it has none."""
+    if not isinstance(decision, dict) or "tier" in decision:
+        return decision
+    p = decision.get("probability")
+    t = decision.get("threshold", threshold)
+    if not isinstance(p, int | float) or not isinstance(t, int | float):
+        return decision  # not a decision: validation says what is wrong with it
+    high = decision.get("high_threshold") or high_threshold
+    return {
+        **decision,
+        "tier": tier_of(float(p), float(t), float(high)).value,
+        "threshold": t,
+        "high_threshold": high,
+    }
+
+
+def derive_tiers(result: dict[str, Any]) -> dict[str, Any]:
+    """A stored result with the tiers of its field decisions filled in where it has none.
+
+    A case stored before tiers carries its probabilities and operating thresholds;
+    its tiers are those they give (:func:`models.triage.tier_of`), with the high-risk
+    threshold at its default (:data:`models.triage.HIGH_RISK_THRESHOLD`) where none
+    was stored. The case's decision, each occupant's ``triage`` and the vehicle answer
+    (against the case's threshold) get one; second opinions never do. `result` itself
+    is not changed (a new document is returned).
+    """
+    case = result.get("triage")
+    if not isinstance(case, dict) or "tier" in case:
+        return result
+    out = dict(result)
+    out["triage"] = _derived(case, None, HIGH_RISK_THRESHOLD)
+    occupants = result.get("occupants")
+    if isinstance(occupants, list):
+        out["occupants"] = [
+            {**o, "triage": _derived(o.get("triage"), None, HIGH_RISK_THRESHOLD)}
+            if isinstance(o, dict)
+            else o
+            for o in occupants
+        ]
+    if isinstance(result.get("vehicle"), dict):
+        out["vehicle"] = _derived(result["vehicle"], case.get("threshold"), HIGH_RISK_THRESHOLD)
+    return out
 
 
 def _occupant_out(o: OccupantTriage) -> OccupantOut:
@@ -471,6 +589,9 @@ def to_case_result(
                 heldout_auc=result.vehicle.heldout_auc,
                 outcome=result.vehicle.outcome,
                 model=result.vehicle.model,
+                tier=result.vehicle.tier,
+                threshold=result.vehicle.threshold,
+                high_threshold=result.vehicle.high_threshold,
             )
             if result.vehicle is not None
             else None

@@ -232,6 +232,9 @@ def _case_rows(
         engine_version=payload["engine_version"],
         iss15_plus=payload["triage"]["iss15_plus"],
         probability=payload["triage"]["probability"],
+        # None for a result spooled before tiers (the list derives those)
+        tier=payload["triage"].get("tier"),
+        high_threshold=payload["triage"].get("high_threshold"),
         occupants=[
             CaseOccupant(
                 position=i,
@@ -240,6 +243,7 @@ def _case_rows(
                 method=o["method"],
                 iss15_plus=o["triage"]["iss15_plus"],
                 probability=o["triage"]["probability"],
+                tier=o["triage"].get("tier"),
             )
             for i, o in enumerate(payload["occupants"])
         ],
@@ -454,6 +458,8 @@ def stored_case(case: Case) -> StoredCase:
         source_format="veds" if case.source_format == "veds" else "json",
         source_document=case.source_document,
         source_mapping=case.source_mapping,
+        tiers_derived=not isinstance(case.result.get("triage"), dict)
+        or "tier" not in case.result["triage"],
     )
 
 
@@ -518,6 +524,7 @@ def list_cases(
                 client_name=c.client_name,
                 received_at=c.received_at,
                 iss15_plus=c.iss15_plus,
+                tier=repository.case_tier(c),
                 probability=c.probability,
                 impact_modes=[o.impact_mode for o in c.occupants],
             )

@@ -29,6 +29,14 @@ def cmd_serve(args: argparse.Namespace) -> int:
     port = args.port or settings.port
     workers = args.workers or settings.workers or os.cpu_count() or 1
     configure_logging(settings.log_level)
+    if workers > 1:  # one worker's start refuses it itself; several would be restarted
+        from service.context import check_high_risk_threshold
+
+        try:
+            check_high_risk_threshold(settings)
+        except ValueError as exc:
+            echo(f"error: {exc}", err=True)
+            return 2
     if settings.auto_migrate:  # once, before the workers start
         from service.db import migrate
 

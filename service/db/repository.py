@@ -7,9 +7,10 @@ from dataclasses import dataclass
 from datetime import datetime
 from typing import Any
 
-from sqlalchemy import and_, delete, exists, func, or_, select, text, update
+from sqlalchemy import ColumnElement, and_, case, delete, exists, func, or_, select, text, update
 from sqlalchemy.orm import Session, selectinload
 
+from models.tiers import HIGH_RISK_THRESHOLD, Tier
 from service.db.tables import (
     ApiKey,
     Case,
@@ -25,6 +26,7 @@ __all__ = [
     "add_api_key",
     "add_case",
     "case_record",
+    "case_tier",
     "count_cases",
     "end_browser_session",
     "find_active_key",
@@ -40,6 +42,7 @@ __all__ = [
     "probe_write",
     "revoke_api_key",
     "rotate_api_key",
+    "tier_expression",
 ]
 
 
@@ -162,6 +165,35 @@ class CaseFilters:
     received_before: datetime | None = None
     iss15_plus: bool | None = None
     impact_mode: str | None = None
+    tier: Tier | None = None
+
+
+def tier_expression() -> ColumnElement[str]:
+    """The case's tier in SQL: as stored, else derived for a case stored before tiers.
+
+    Derived as :func:`models.tiers.tier_of` of the stored decision (``iss15_plus``
+    is the probability at or above the operating threshold) with the high-risk
+    threshold at its default; :func:`case_tier` is the same in Python.
+    """
+    derived = case(
+        (Case.iss15_plus.is_(False), Tier.NONE.value),
+        (
+            Case.probability >= func.coalesce(Case.high_threshold, HIGH_RISK_THRESHOLD),
+            Tier.HIGH.value,
+        ),
+        else_=Tier.MODERATE.value,
+    )
+    return func.coalesce(Case.tier, derived)
+
+
+def case_tier(c: Case) -> Tier:
+    """The tier of a case row (:func:`tier_expression` in Python)."""
+    if c.tier is not None:
+        return Tier(c.tier)
+    if not c.iss15_plus:
+        return Tier.NONE
+    high = HIGH_RISK_THRESHOLD if c.high_threshold is None else c.high_threshold
+    return Tier.HIGH if c.probability >= high else Tier.MODERATE
 
 
 def list_cases(
@@ -185,6 +217,8 @@ def list_cases(
         stmt = stmt.where(Case.received_at < filters.received_before)
     if filters.iss15_plus is not None:
         stmt = stmt.where(Case.iss15_plus.is_(filters.iss15_plus))
+    if filters.tier is not None:
+        stmt = stmt.where(tier_expression() == filters.tier.value)
     if filters.impact_mode is not None:
         stmt = stmt.where(
             exists().where(

@@ -109,6 +109,11 @@ class Case(Base):
     engine_version: Mapped[str] = mapped_column(String(32))
     iss15_plus: Mapped[bool] = mapped_column(Boolean)
     probability: Mapped[float] = mapped_column(Float)
+    #: The case's risk tier (``high``, ``moderate``, ``none``) and the high-risk
+    #: threshold it was set with; None for cases stored before tiers, whose tier is
+    #: derived when read (``repository.tier_expression``), the rows left as stored.
+    tier: Mapped[str | None] = mapped_column(String(16))
+    high_threshold: Mapped[float | None] = mapped_column(Float)
 
     occupants: Mapped[list[CaseOccupant]] = relationship(
         back_populates="case", cascade="all, delete-orphan", order_by="CaseOccupant.position"
@@ -131,6 +136,8 @@ class CaseOccupant(Base):
     method: Mapped[str] = mapped_column(String(16))
     iss15_plus: Mapped[bool] = mapped_column(Boolean)
     probability: Mapped[float] = mapped_column(Float)
+    #: The occupant's risk tier; None for cases stored before tiers.
+    tier: Mapped[str | None] = mapped_column(String(16))
 
     case: Mapped[Case] = relationship(back_populates="occupants")
 

@@ -242,7 +242,8 @@ _M = Kind.MANDATORY
 
 #: The sections of a PatientCareReport in schema order (EMSDataSet_v3.xsd), each with the
 #: elements written (module docstring). ``eInjury`` is built by the mapping itself (its
-#: ACN block repeats per seat); it is listed empty here to keep the order.
+#: ACN block repeats per seat), as is ``eNarrative`` (the occupant's tier in words); they
+#: are listed empty here to keep the order.
 SECTIONS: Final[tuple[Group, ...]] = (
     Group(
         "eRecord",
@@ -316,6 +317,7 @@ SECTIONS: Final[tuple[Group, ...]] = (
         ),
     ),
     Group("eHistory", _nv("eHistory.01", "eHistory.17")),
+    Group("eNarrative", ()),
     Group(
         "eVitals",
         (

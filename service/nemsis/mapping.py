@@ -8,9 +8,11 @@ What each element is filled from is in ``docs/api.md`` (the mapping table). In s
   PDOF as a clock hour, multiple impacts, rollover, one seat group per occupant
   (seat, occupied, belt, airbag deployed); for a VEDS case also the vehicle's make,
   model, year and body type.
-- Per occupant: eInjury.23 "high probability of injury" and eInjury.04 2904013
-  ("vehicle telemetry data consistent with severe injury") from the occupant's
-  decision; the occupant's seat (eInjury.06) and airbags (eInjury.08); age and sex.
+- Per occupant, from the tier of the occupant's decision: eInjury.04 2904013
+  ("vehicle telemetry data consistent with severe injury") for the high and moderate
+  tiers, eInjury.23 "high probability of injury" Yes for the high tier alone, and a
+  narrative (eNarrative.01) that names the tier, the probability and the thresholds;
+  the occupant's seat (eInjury.06) and airbags (eInjury.08); age and sex.
 - Every other element NEMSIS requires: NV 7701003 "Not Recorded", except the
   elements NEMSIS allows no not-value, which describe the EMS unit's own response
   and carry the documented placeholders of :data:`~service.nemsis.codes.PLACEHOLDERS`.
@@ -36,6 +38,7 @@ from typing import Any, Final
 from lxml import etree
 from pydantic import AwareDatetime, TypeAdapter, ValidationError
 
+from models.tiers import HIGH_RISK_THRESHOLD, Tier
 from service import __version__
 from service.cases.result import StoredCase
 from service.nemsis import codes
@@ -49,6 +52,7 @@ __all__ = [
     "Omission",
     "RecordReport",
     "build_record",
+    "narrative",
     "pdof_clock_hour",
     "report_number",
     "report_uuid",
@@ -462,9 +466,9 @@ def _collision_group(facts: _Facts, parent: etree._Element, i: int) -> None:
         note.leave_out("eInjury.21", "multiple impacts not reported")
     pulse = case.result.pulse
     _delta_velocities(note, group)
-    decided = case.result.occupants[i].triage.iss15_plus
-    w.add(group, "eInjury.23", codes.YES_NO[decided])
-    facts.fill("eInjury.23", f"result.occupants[{i}].triage.iss15_plus", i)
+    high = case.result.occupants[i].triage.tier is Tier.HIGH
+    w.add(group, "eInjury.23", codes.YES_NO[high])
+    facts.fill("eInjury.23", f"result.occupants[{i}].triage.tier (high: yes)", i)
     w.add(group, "eInjury.24", str(pdof_clock_hour(pulse.pdof_deg)))
     note.fill("eInjury.24", "result.pulse.pdof_deg (clock hour)")
     rollover = facts.given("crash.rollover")
@@ -514,9 +518,9 @@ def _injury(facts: _Facts, parent: etree._Element, i: int) -> None:
     section = w.add(parent, "eInjury")
     w.not_recorded(section, "eInjury.01")
     w.not_recorded(section, "eInjury.03")
-    if facts.case.result.occupants[i].triage.iss15_plus:
+    if facts.case.result.occupants[i].triage.tier in (Tier.HIGH, Tier.MODERATE):
         w.add(section, "eInjury.04", codes.TRIAGE_TELEMETRY_SEVERE)
-        facts.fill("eInjury.04", f"result.occupants[{i}].triage.iss15_plus (2904013)", i)
+        facts.fill("eInjury.04", f"result.occupants[{i}].triage.tier (high, moderate: 2904013)", i)
     else:
         w.not_recorded(section, "eInjury.04")
     row = _seat_row_location(facts, i)
@@ -533,6 +537,48 @@ def _injury(facts: _Facts, parent: etree._Element, i: int) -> None:
             w.add(section, "eInjury.08", code)
         facts.fill("eInjury.08", f"occupants[{i}].frontal_airbag, side_airbag", i)
     _collision_group(facts, section, i)
+
+
+#: The narrative's words for each tier (``models.tiers``).
+NARRATIVE_TIERS: Final = {
+    Tier.HIGH: "HIGH RISK (at or above the high-risk threshold {high})",
+    Tier.MODERATE: "MODERATE RISK (at or above the operating threshold {threshold}, below the "
+    "high-risk threshold {high}: the 2021 field triage guideline's telemetry criterion)",
+    Tier.NONE: "NO TELEMETRY INDICATION (below the operating threshold {threshold})",
+}
+
+
+def _pct_text(p: float) -> str:
+    return f"{100.0 * p:.1f} %"
+
+
+def narrative(case: StoredCase, i: int) -> str:
+    """eNarrative.01 of occupant `i`: the tier in words, its probability and thresholds."""
+    d = case.result.occupants[i].triage
+    seat = str(case.result.occupants[i].seat.value).replace("_", " ")
+    tier = d.tier or Tier.NONE
+    high = d.high_threshold if d.high_threshold is not None else HIGH_RISK_THRESHOLD
+    words = NARRATIVE_TIERS[tier].format(threshold=_pct_text(d.threshold), high=_pct_text(high))
+    low, up = d.probability_ci95
+    text = (
+        f"Automatic crash notification, occupant {i + 1} of {len(case.result.occupants)} "
+        f"({seat}): {words}. P(ISS 15+) {_pct_text(d.probability)} (95 % interval "
+        f"{_pct_text(low)} to {_pct_text(up)}), {d.model}"
+        + (f" at operating point {d.operating_point}" if d.operating_point else "")
+        + f". Recommendation: {d.recommendation}"
+    )
+    if case.tiers_derived:
+        text += (
+            " (Case stored before risk tiers: the tier is that of the stored probability and "
+            "threshold, the high-risk threshold at its default.)"
+        )
+    return text
+
+
+def _narrative(facts: _Facts, parent: etree._Element, i: int) -> None:
+    section = _Writer.add(parent, "eNarrative")
+    _Writer.add(section, "eNarrative.01", narrative(facts.case, i))
+    facts.fill("eNarrative.01", f"result.occupants[{i}].triage (tier, probability, thresholds)", i)
 
 
 # ------------------------------------------------------------------ the report
@@ -597,6 +643,8 @@ def _report(facts: _Facts, parent: etree._Element, i: int, base: Mapping[str, li
     for section in codes.SECTIONS:
         if section.name == "eInjury":
             _injury(facts, pcr, i)
+        elif section.name == "eNarrative":
+            _narrative(facts, pcr, i)
         else:
             _Writer.template(pcr, section, values)
     pcr.insert(0, etree.Comment(_report_comment(facts, i, n)))

@@ -26,6 +26,7 @@ from sqlalchemy.exc import DBAPIError
 from sqlalchemy.exc import TimeoutError as PoolTimeoutError
 
 from models.impact_mode import ImpactMode
+from models.tiers import Tier
 from service.auth import Caller, Role, caller_for_key, caller_for_key_id
 from service.cases import service as cases_service
 from service.context import ServiceContext
@@ -242,6 +243,7 @@ def case_list(request: Request, ctx: ContextDep) -> Response:
     settings = ctx.settings
     echo = {
         "iss15_plus": q.get("iss15_plus", ""),
+        "tier": q.get("tier", ""),
         "impact_mode": q.get("impact_mode", ""),
         "received_from": q.get("received_from", ""),
         "received_before": q.get("received_before", ""),
@@ -254,6 +256,9 @@ def case_list(request: Request, ctx: ContextDep) -> Response:
         impact = echo["impact_mode"].strip()
         if impact and impact not in {m.value for m in ImpactMode}:
             raise ValueError(f"Unknown impact mode {impact!r}.")
+        tier = echo["tier"].strip()
+        if tier and tier not in {t.value for t in Tier}:
+            raise ValueError(f"Unknown risk tier {tier!r}: high, moderate or none.")
         limit_text = echo["limit"].strip()
         if limit_text and not (limit_text.isdigit() and int(limit_text) >= 1):
             raise ValueError("Per page must be a whole number of at least 1.")
@@ -265,6 +270,7 @@ def case_list(request: Request, ctx: ContextDep) -> Response:
             received_before=_when(echo["received_before"], "Received before"),
             iss15_plus=_flag(echo["iss15_plus"]),
             impact_mode=impact or None,
+            tier=Tier(tier) if tier else None,
         )
         listing = cases_service.list_cases(ctx, filters, limit=page, cursor=q.get("cursor") or None)
         rows = report.list_rows(listing.items)

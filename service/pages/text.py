@@ -1,11 +1,30 @@
-"""How the pages write numbers, times and durations (plain functions of values)."""
+"""How the pages write numbers, times, durations and risk tiers (plain functions of values)."""
 
 from __future__ import annotations
 
 from datetime import UTC, datetime
 from typing import Any
 
-__all__ = ["elapsed_text", "fmt", "parse_time", "pct", "utc_text"]
+__all__ = [
+    "TIER_HEADLINES",
+    "TIER_SYMBOLS",
+    "elapsed_text",
+    "fmt",
+    "parse_time",
+    "pct",
+    "utc_text",
+]
+
+#: The banner's words by risk tier (``models.tiers``); a decision without a tier (a
+#: second opinion) is said as a telemetry indication or none.
+TIER_HEADLINES = {
+    "high": "High risk: highest-level trauma center",
+    "moderate": "Moderate risk: consider a trauma center",
+    "none": "No telemetry indication",
+}
+#: Each tier's symbol beside its words (colour is never the only signal): a triangle,
+#: a diamond, a disc.
+TIER_SYMBOLS = {"high": "\u25b2", "moderate": "\u25c6", "none": "\u25cf"}
 
 
 def pct(p: float) -> str:

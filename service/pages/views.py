@@ -37,7 +37,9 @@ from models.injury.risk import (
     VC_TOLERANCE_VIANO_1989_CHEST,
 )
 from models.notification import Body, Seat
+from service.cases.result import derive_tiers
 from service.db.repository import CaseRecord
+from service.pages import text as wording
 from service.pages.drawing import (
     BODY_REGIONS,
     Bar,
@@ -209,6 +211,9 @@ class DecisionView:
     """One decision (`triage`, `occupant_model` or `baseline`) ready to show."""
 
     flagged: bool
+    #: ``high``, ``moderate`` or ``none``: the field decision's tier (for a second
+    #: opinion, ``moderate`` when it flags: it has no tier of its own)
+    tier: str
     headline: str
     recommendation: str
     probability: float
@@ -221,6 +226,7 @@ class DecisionView:
     model: str
     operating_point: str | None
     bar: Bar
+    high_threshold: float | None = None
 
     @property
     def probability_text(self) -> str:
@@ -233,6 +239,14 @@ class DecisionView:
     @property
     def threshold_text(self) -> str:
         return pct(self.threshold)
+
+    @property
+    def symbol(self) -> str:
+        return wording.TIER_SYMBOLS[self.tier]
+
+    @property
+    def high_threshold_text(self) -> str:
+        return pct(self.high_threshold) if self.high_threshold is not None else ""
 
 
 def decision_view(triage: Mapping[str, Any] | None) -> DecisionView | None:
@@ -248,9 +262,11 @@ def decision_view(triage: Mapping[str, Any] | None) -> DecisionView | None:
         low, high = _num(ci[0]) or 0.0, _num(ci[1]) or 0.0
     flagged = bool(triage.get("iss15_plus"))
     outcome = str(triage.get("outcome") or "")
+    tier = str(triage.get("tier") or ("moderate" if flagged else "none"))  # second opinions
     return DecisionView(
         flagged=flagged,
-        headline="Trauma center" if flagged else "No trauma-center indication",
+        tier=tier,
+        headline=wording.TIER_HEADLINES[tier],
         recommendation=str(triage.get("recommendation") or ""),
         probability=p,
         low=low,
@@ -266,6 +282,7 @@ def decision_view(triage: Mapping[str, Any] | None) -> DecisionView | None:
         model=str(triage.get("model") or ""),
         operating_point=triage.get("operating_point"),
         bar=probability_bar(p, low, high, threshold),
+        high_threshold=_num(triage.get("high_threshold")),
     )
 
 
@@ -381,6 +398,8 @@ class CaseView:
     occupants: tuple[OccupantView, ...]
     crash: CrashView
     audit: AuditView
+    #: stored before risk tiers: the tiers shown are derived (``derive_tiers``)
+    tiers_derived: bool = False
 
 
 _OCCUPANT_PREFIX = re.compile(r"^occupants\[(\d+)\]:\s*")
@@ -653,8 +672,11 @@ def _source_view(record: CaseRecord) -> dict[str, str]:
 
 
 def build_case_view(record: CaseRecord, *, now: datetime) -> CaseView:
-    """The case page's view of a stored case (nothing is recomputed)."""
-    result, notification = record.result, record.notification
+    """The case page's view of a stored case (nothing is recomputed; a case stored
+    before risk tiers shows the tiers of its stored probabilities and thresholds)."""
+    stored_triage = record.result.get("triage")
+    derived = isinstance(stored_triage, Mapping) and "tier" not in stored_triage
+    result, notification = derive_tiers(dict(record.result)), record.notification
     case_level, per_occupant = _assumptions(result.get("assumptions"))
     given_list = notification.get("occupants")
     given_list = given_list if isinstance(given_list, list) else []
@@ -708,6 +730,7 @@ def build_case_view(record: CaseRecord, *, now: datetime) -> CaseView:
         occupants=occupants,
         crash=_crash_view(notification, result, occupants, case_level),
         audit=audit,
+        tiers_derived=derived,
     )
 
 
@@ -721,9 +744,18 @@ class ListRow:
     client_name: str
     received_text: str
     flagged: bool
+    tier: str
     probability: float
     probability_text: str
     impact_modes: str
+
+    @property
+    def symbol(self) -> str:
+        return wording.TIER_SYMBOLS[self.tier]
+
+    @property
+    def tier_text(self) -> str:
+        return wording.TIER_HEADLINES[self.tier].split(":")[0]
 
 
 def list_rows(items: Sequence[Any]) -> tuple[ListRow, ...]:
@@ -735,6 +767,7 @@ def list_rows(items: Sequence[Any]) -> tuple[ListRow, ...]:
             client_name=c.client_name,
             received_text=utc_text(c.received_at),
             flagged=c.iss15_plus,
+            tier=str(c.tier),
             probability=c.probability,
             probability_text=pct(c.probability),
             impact_modes=", ".join(MODE_LABELS.get(m, m) for m in c.impact_modes),

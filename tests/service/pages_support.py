@@ -158,6 +158,37 @@ def acceleration() -> dict[str, Any]:
     return body
 
 
+def mixed_tiers() -> dict[str, Any]:
+    """Issue 39's near-side crash with a belted far-side passenger: the driver in the high
+    tier (P about 0.40), the passenger in the moderate one (about 0.09)."""
+    body = near_side_56()
+    body["occupants"].append(
+        {
+            "seat": "front_passenger",
+            "body": "male_50th",
+            "age_years": 30,
+            "sex": "male",
+            "belted": True,
+            "frontal_airbag": "deployed",
+            "side_airbag": "not_deployed",
+        }
+    )
+    body["occurred_at"] = recent(4)
+    return body
+
+
+#: The case page's banner words of each risk tier (written out here, not imported: the
+#: tests hold the page to them).
+TIER_VERDICTS = {
+    "high": "HIGH RISK: HIGHEST-LEVEL TRAUMA CENTER",
+    "moderate": "MODERATE RISK: CONSIDER A TRAUMA CENTER",
+    "none": "NO TELEMETRY INDICATION",
+}
+
+#: The notification of each tier the page tests use (checked on the stored answer).
+TIER_CASES = {"high": near_side_56, "moderate": head_injury, "none": minor}
+
+
 def csrf_token(html: str) -> str:
     match = re.search(r'name="csrf_token" value="([^"]+)"', html)
     assert match, "no csrf_token in the form"

@@ -217,3 +217,21 @@ def test_the_readme_example_answers_over_http_as_the_readme_says(api: ApiClient)
     for key in ("probability", "probability_ci95", "threshold", "model", "operating_point"):
         assert got[key] == expected[key], key
     assert got["recommendation"] == expected["recommendation"]
+    assert got["tier"] == expected["tier"]
+
+
+def test_the_readme_tier_examples_answer_over_http_as_the_readme_says(api: ApiClient) -> None:
+    """Each tier's example of the README's generated block, through the real HTTP path."""
+    import json
+
+    from models.offline.field.readme import TIER_EXAMPLES, example_answer
+
+    doc = json.loads(default_artifact_path().read_text(encoding="utf-8"))
+    expected = example_answer(doc)["tiers"]
+    for tier, body in TIER_EXAMPLES.items():
+        r = api.client.post("/v1/cases", json=body, headers=api.headers("submitter"))
+        assert r.status_code == 201, r.text
+        got = r.json()["triage"]
+        assert got["tier"] == expected[tier]["tier"] == tier
+        for key in ("probability", "probability_ci95", "threshold", "recommendation"):
+            assert got[key] == expected[tier][key], (tier, key)

@@ -39,8 +39,19 @@ def test_the_result_example_is_the_shipped_engines_answer() -> None:
         notification, load_engine_models(), case_id=None, received_at=datetime.now(UTC)
     ).model_dump(mode="json")
     documented = EXAMPLE_CASE_RESULT
-    for key in ("iss15_plus", "model", "operating_point", "outcome", "recommendation"):
+    for key in ("iss15_plus", "model", "operating_point", "outcome", "recommendation", "tier"):
         assert documented["triage"][key] == result["triage"][key], key
+    for key in ("tier", "high_threshold"):
+        assert documented["vehicle"][key] == result["vehicle"][key], key
+    assert documented["triage"]["high_threshold"] == result["triage"]["high_threshold"]
+    for opinion in ("occupant_model", "baseline"):
+        got, want = documented["occupants"][0][opinion], result["occupants"][0][opinion]
+        assert got["recommendation"] == want["recommendation"], opinion
+        assert got["tier"] is None, opinion
+        assert want["tier"] is None, opinion
+    assert documented["models"]["triage_code"] == result["models"]["triage_code"], (
+        "the example's triage_code checksum is the code's: copy it from the answer"
+    )
     for key in ("probability", "threshold"):
         assert documented["triage"][key] == pytest.approx(result["triage"][key], rel=5e-4)
     for got, want in zip(

@@ -239,6 +239,13 @@ def _edr() -> dict[str, Any]:
     return example("delta_v")
 
 
+#: How the narrative (eNarrative.01) names each tier.
+TIER_NARRATIVE = {
+    "high": "HIGH RISK",
+    "moderate": "MODERATE RISK",
+    "none": "NO TELEMETRY INDICATION",
+}
+
 JSON_CASES = {
     "one-occupant": lambda: summary(56.0, 0.0),
     "several-occupants-airbags-by-seat": _several,
@@ -266,12 +273,16 @@ def _check_against_stored(tree: etree._Element, stored: dict[str, Any]) -> None:
         hour = int(_text(group, "n:eInjury.24") or "")
         off = (hour % 12) * 30.0 - result["pulse"]["pdof_deg"]
         assert abs((off + 180.0) % 360.0 - 180.0) <= 15.0
-        flagged = decided["triage"]["iss15_plus"]
-        assert _text(group, "n:eInjury.23") == ("9923003" if flagged else "9923001")
+        flagged, tier = decided["triage"]["iss15_plus"], decided["triage"]["tier"]
+        assert flagged == (tier in ("high", "moderate"))
+        assert _text(group, "n:eInjury.23") == ("9923003" if tier == "high" else "9923001")
         if flagged:
             assert _texts(pcr, "n:eInjury/n:eInjury.04") == ["2904013"]
         else:
             assert _not_recorded(pcr, "n:eInjury/n:eInjury.04")
+        narrative = _text(pcr, "n:eNarrative/n:eNarrative.01") or ""
+        assert TIER_NARRATIVE[tier] in narrative
+        assert decided["triage"]["recommendation"] in narrative
         assert _text(group, "n:eInjury.12") == stored["event_id"]
         at = datetime.fromisoformat(_text(group, "n:eInjury.14") or "")
         assert at == datetime.fromisoformat(stored["notification"]["occurred_at"])
@@ -443,8 +454,8 @@ def test_the_record_of_a_veds_case_is_valid_and_says_what_the_case_says(
         ]
         triaged = stored["result"]["pulse"]["delta_v_kmh"]
         assert any(abs(int(p.text or "") - triaged) <= 0.5 for p in pulses)
-        flagged = decided["triage"]["iss15_plus"]
-        assert _text(group, "n:eInjury.23") == ("9923003" if flagged else "9923001")
+        high = decided["triage"]["tier"] == "high"
+        assert _text(group, "n:eInjury.23") == ("9923003" if high else "9923001")
         vehicle = stored["source_mapping"]["vehicle"]
         assert _text(group, "n:eInjury.18") == vehicle["make"]
         assert _text(group, "n:eInjury.20") == vehicle["model_year"]

@@ -23,12 +23,15 @@ from service.pages.drawing import car_diagram, pulse_plot
 from service.pages.session import SESSION_COOKIE, issue_session
 from service.settings import Settings
 from tests.service.pages_support import (
+    TIER_CASES,
+    TIER_VERDICTS,
     Page,
     acceleration,
     cookie_value,
     csrf_token,
     head_injury,
     minor,
+    mixed_tiers,
     rear_seat_rollover,
     set_cookies,
     side_edr,
@@ -92,7 +95,9 @@ def test_the_page_numbers_are_the_stored_case_numbers(api: ApiClient, make: Any)
         f"{100 * low:.1f} % to {100 * high:.1f} %"
     )
     verdict = page.text(page.by_class("verdict", within="decision")[0])
-    assert verdict == ("TRAUMA CENTER" if triage["iss15_plus"] else "NO TRAUMA-CENTER INDICATION")
+    assert decision.attrs["data-tier"] == triage["tier"]
+    assert verdict == TIER_VERDICTS[triage["tier"]]
+    assert f"tier-{triage['tier']}" in decision.attrs["class"].split()
     assert "US towaway crashes" in page.text(decision)
 
     for i, occ in enumerate(result["occupants"]):
@@ -178,6 +183,38 @@ def test_the_crash_facts_say_how_many_impacts_were_counted(api: ApiClient) -> No
         page = _page(api, post_case(api, body)["case_id"])
         said[name] = page.text(page.by_class("multiple-impacts")[0])
     assert said == {"counted": "YES (3 impacts)", "single": "no (1 impact)", "uncounted": "YES"}
+
+
+@pytest.mark.parametrize("tier", ["high", "moderate", "none"])
+def test_the_banner_says_the_tier_in_its_words(api: ApiClient, tier: str) -> None:
+    case_id = post_case(api, TIER_CASES[tier]())["case_id"]
+    triage = stored_case(api, case_id)["result"]["triage"]
+    assert triage["tier"] == tier, "the case chosen for the tier lands in it"
+    page = _page(api, case_id)
+    decision = page.one(id="decision")
+    assert decision.attrs["data-tier"] == tier
+    assert f"tier-{tier}" in decision.attrs["class"].split()
+    assert page.text(page.by_class("verdict", within="decision")[0]) == TIER_VERDICTS[tier]
+    words = page.text(page.by_class("recommendation", within="decision")[0])
+    assert words == triage["recommendation"]
+    assert "Level I" not in page.html
+    card = page.one(id="occupant-0")
+    assert card.attrs["data-tier"] == tier
+    assert f"tier-{tier}" in card.attrs["class"].split()
+
+
+def test_the_banner_summarises_every_occupants_tier(api: ApiClient) -> None:
+    case_id = post_case(api, mixed_tiers())["case_id"]
+    result = stored_case(api, case_id)["result"]
+    assert [o["triage"]["tier"] for o in result["occupants"]] == ["high", "moderate"]
+    assert result["triage"]["tier"] == "high", "the case's tier is its worst occupant's"
+    page = _page(api, case_id)
+    items = page.all("li", within="decision", data_occupant="*")
+    assert [e.attrs["data-tier"] for e in items] == ["high", "moderate"]
+    assert page.text(items[0]).startswith("\u25b2 Driver: high risk")
+    assert page.text(items[1]).startswith("\u25c6 Front passenger: moderate risk")
+    one = _page(api, post_case(api, minor())["case_id"])
+    assert not one.by_class("occupant-tiers"), "one occupant: the banner says it all"
 
 
 # ---------------------------------------------------------------- stored, not recomputed
@@ -503,6 +540,22 @@ def test_the_case_list_filters_like_the_api(api: ApiClient) -> None:
         "/v1/cases", params={"iss15_plus": "true"}, headers=api.headers("auditor")
     ).json()["items"]
     assert [c["case_id"] for c in api_rows] == listed(iss15_plus="true")
+    # by risk tier: both flagged cases are moderate (about 5 % and 12 %), none high
+    assert listed(tier="moderate") == [ids["side"], ids["head"]]
+    assert listed(tier="none") == [ids["minor"]]
+    assert listed(tier="high") == []
+    for tier in ("high", "moderate", "none"):
+        api_rows = api.client.get(
+            "/v1/cases", params={"tier": tier}, headers=api.headers("auditor")
+        ).json()["items"]
+        assert [c["case_id"] for c in api_rows] == listed(tier=tier)
+        assert {c["tier"] for c in api_rows} <= {tier}
+    rows = Page(api.client.get("/v1/reports", headers=api.headers("auditor")).text)
+    assert [e.attrs["data-tier"] for e in rows.all("tr", data_case_id="*")] == [
+        "moderate",
+        "none",
+        "moderate",
+    ]
     # pages of one, walked through the "older cases" link
     r = api.client.get("/v1/reports", params={"limit": "1"}, headers=api.headers("auditor"))
     seen = []
@@ -515,7 +568,12 @@ def test_the_case_list_filters_like_the_api(api: ApiClient) -> None:
         r = api.client.get(nxt[0].attrs["href"], headers=api.headers("auditor"))
     assert seen == [ids["side"], ids["minor"], ids["head"]]
     # a bad filter is named, with the form kept
-    for params in ({"impact_mode": "sideways"}, {"limit": "0"}, {"received_from": "yesterday"}):
+    for params in (
+        {"impact_mode": "sideways"},
+        {"limit": "0"},
+        {"received_from": "yesterday"},
+        {"tier": "severe"},
+    ):
         r = api.client.get("/v1/reports", params=params, headers=api.headers("auditor"))
         assert r.status_code == 422
         assert Page(r.text).all("p", role="alert")

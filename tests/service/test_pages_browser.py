@@ -27,9 +27,11 @@ import pytest
 
 from tests.paths import ROOT as REPO
 from tests.service.pages_support import (
+    TIER_VERDICTS,
     acceleration,
     head_injury,
     minor,
+    mixed_tiers,
     near_side_56,
     rear_seat_rollover,
     side_edr,
@@ -53,6 +55,17 @@ CHROMIUM_ARGS = [
 
 #: The AIS 0 fill of report.css (a region not at risk).
 AIS0_FILL = "rgb(236, 239, 241)"
+
+#: The banner's border colour of each risk tier (report.css --flag, --moderate, --clear).
+TIER_COLOURS = {
+    "high": "rgb(165, 14, 14)",
+    "moderate": "rgb(138, 70, 0)",
+    "none": "rgb(11, 79, 138)",
+}
+#: The served case of each tier (its stored tier is checked).
+TIER_CASE_NAMES = {"high": "near-side-56", "moderate": "head-injury", "none": "minor"}
+#: Each tier's symbol (colour is never the only signal).
+TIER_SYMBOLS = {"high": "\u25b2", "moderate": "\u25c6", "none": "\u25cf"}
 
 
 def screenshot_dir() -> Path:
@@ -123,7 +136,7 @@ class Served:
 
 @pytest.fixture(scope="module")
 def served(chromium: Any, tmp_path_factory: pytest.TempPathFactory) -> Iterator[Served]:
-    """The service as a process of its own, with keys and five real cases."""
+    """The service as a process of its own, with keys and seven real cases."""
     tmp = tmp_path_factory.mktemp("served")
     env = {
         **os.environ,
@@ -159,6 +172,7 @@ def served(chromium: Any, tmp_path_factory: pytest.TempPathFactory) -> Iterator[
             "rear-seat-rollover": rear_seat_rollover,
             "acceleration": acceleration,
             "near-side-56": near_side_56,
+            "mixed-tiers": mixed_tiers,
         }
         for name, make in makers.items():
             r = httpx.post(base + "/v1/cases", json=make(), headers=submit, timeout=60)
@@ -254,7 +268,8 @@ def test_case_page_shows_the_recommendation_and_interval_without_console_errors(
     assert response.status == 200
     triage = served.cases["head-injury"]["result"]["triage"]
     decision = page.locator("#decision")
-    assert decision.locator(".verdict").inner_text() == "TRAUMA CENTER"
+    assert triage["tier"] == "moderate"
+    assert decision.locator(".verdict").inner_text() == TIER_VERDICTS["moderate"]
     assert triage["recommendation"] in decision.inner_text()
     assert decision.locator(".probability").inner_text() == _pct(triage["probability"])
     low, high = triage["probability_ci95"]
@@ -268,10 +283,61 @@ def test_case_page_shows_the_recommendation_and_interval_without_console_errors(
     assert ci.is_visible()
     assert float(ci.get_attribute("width") or 0) > 1
     assert decision.locator("svg.pbar line.threshold").count() == 1
-    # the stylesheet loaded under the CSP: the decision is framed in the alarm colour
+    # the stylesheet loaded under the CSP: the decision is framed in its tier's colour
     border = decision.evaluate("e => getComputedStyle(e).borderTopColor")
-    assert border == "rgb(165, 14, 14)"
+    assert border == TIER_COLOURS["moderate"]
     _shot(page, "case-head-injury")
+    assert tab.problems == []
+    page.close()
+
+
+@pytest.mark.parametrize("tier", ["high", "moderate", "none"])
+def test_the_banner_shows_each_tier_in_its_colour_symbol_and_words(
+    served: Served, signed_in: Any, tier: str
+) -> None:
+    name = TIER_CASE_NAMES[tier]
+    triage = served.cases[name]["result"]["triage"]
+    assert triage["tier"] == tier, f"{name} must land in the {tier} tier"
+    tab = _tab(signed_in)
+    page = tab.page
+    assert page.goto(served.url(name)).status == 200
+    decision = page.locator("#decision")
+    assert decision.get_attribute("data-tier") == tier
+    assert decision.locator(".verdict").inner_text() == TIER_VERDICTS[tier]
+    assert decision.locator(".headline .symbol").inner_text() == TIER_SYMBOLS[tier]
+    assert decision.locator(".recommendation").inner_text() == triage["recommendation"]
+    assert "Level I" not in page.content()
+    for side in ("Top", "Left"):
+        colour = decision.evaluate(f"e => getComputedStyle(e).border{side}Color")
+        assert colour == TIER_COLOURS[tier], (side, colour)
+    verdict = decision.locator(".verdict").evaluate("e => getComputedStyle(e).color")
+    assert verdict == TIER_COLOURS[tier]
+    card = page.locator("#occupant-0")
+    assert card.get_attribute("data-tier") == tier
+    assert card.evaluate("e => getComputedStyle(e).borderLeftColor") == TIER_COLOURS[tier]
+    _shot(page, f"banner-{tier}")
+    assert tab.problems == []
+    page.close()
+
+
+def test_the_banner_summarises_each_occupants_tier(served: Served, signed_in: Any) -> None:
+    result = served.cases["mixed-tiers"]["result"]
+    tiers = [o["triage"]["tier"] for o in result["occupants"]]
+    assert tiers == ["high", "moderate"]
+    tab = _tab(signed_in)
+    page = tab.page
+    page.goto(served.url("mixed-tiers"))
+    decision = page.locator("#decision")
+    assert decision.get_attribute("data-tier") == "high", "the worst occupant's"
+    items = decision.locator(".occupant-tiers li")
+    assert items.count() == 2
+    for k, tier in enumerate(tiers):
+        item = items.nth(k)
+        assert item.get_attribute("data-tier") == tier
+        assert item.is_visible()
+        assert item.evaluate("e => getComputedStyle(e).color") == TIER_COLOURS[tier]
+        assert f"{tier} risk" in item.inner_text()
+    _shot(page, "banner-occupants")
     assert tab.problems == []
     page.close()
 
@@ -447,10 +513,24 @@ def test_the_case_list_filters(served: Served, signed_in: Any) -> None:
     assert sorted(listed()) == sorted(not_flagged)
     _shot(page, "list-filtered-no-indication")
     page.select_option("select[name=iss15_plus]", "")
+    page.select_option("select[name=tier]", "high")
+    page.click("#filters button[type=submit]")
+    page.wait_for_url("**tier=high**")
+    high = [c["case_id"] for c in served.cases.values() if c["result"]["triage"]["tier"] == "high"]
+    assert sorted(high) == sorted([ids["near-side-56"], ids["mixed-tiers"]])
+    assert sorted(listed()) == sorted(high)
+    rows = page.locator("tr[data-case-id]")
+    for k in range(rows.count()):
+        assert rows.nth(k).locator("td[data-label=Decision]").inner_text().strip() == (
+            "\u25b2 High risk"
+        )
+    _shot(page, "list-filtered-high-risk")
+    page.select_option("select[name=tier]", "")
+    page.select_option("select[name=iss15_plus]", "")
     page.select_option("select[name=impact_mode]", "near_side")
     page.click("#filters button[type=submit]")
     page.wait_for_url("**impact_mode=near_side**")
-    assert sorted(listed()) == sorted([ids["side-edr"], ids["near-side-56"]])
+    assert sorted(listed()) == sorted([ids["side-edr"], ids["near-side-56"], ids["mixed-tiers"]])
     _shot(page, "list-filtered-near-side")
     page.click(f"tr[data-case-id='{ids['side-edr']}'] a")
     page.wait_for_url(served.url("side-edr"))
@@ -479,7 +559,7 @@ def test_an_unauthenticated_visit_is_refused(chromium: Any, served: Served) -> N
     page.fill("#api_key", served.keys["auditor"])
     page.click("#login button[type=submit]")
     page.wait_for_url(served.url("head-injury"))
-    assert page.locator("#decision .verdict").inner_text() == "TRAUMA CENTER"
+    assert page.locator("#decision .verdict").inner_text() == TIER_VERDICTS["moderate"]
     assert tab.problems == []
     context.close()
 

@@ -3,8 +3,9 @@
 ``aacn-triage fit-field`` rewrites the block between :data:`BEGIN` and
 :data:`END` in ``README.md`` (:func:`update_readme`): the held-out table, the
 temporal check, the default and ACS-COT operating points' held-out figures, the
-vehicle answer, the extrapolation limit and the answer to the README's own
-example notification. ``tests/models/field/test_readme_figures.py`` holds the
+vehicle answer, the extrapolation limit, the answer to the README's own
+example notification and one example of each risk tier (a notification chosen to
+land in it, with its answer). ``tests/models/field/test_readme_figures.py`` holds the
 README to what :func:`readme_block` renders from the shipped artifact, so the
 two cannot drift apart.
 """
@@ -40,6 +41,7 @@ __all__ = [
     "BEGIN",
     "END",
     "README_EXAMPLE",
+    "TIER_EXAMPLES",
     "example_answer",
     "example_notification",
     "readme_block",
@@ -73,6 +75,47 @@ README_EXAMPLE: Final[dict[str, Any]] = {
 }
 
 
+#: One notification for each risk tier, chosen to land in it (the README shows each with
+#: its answer; tests/models/field/test_readme_figures.py holds each to its tier): an
+#: unbelted 70-year-old driver without an airbag at 70 km/h frontal (high), the README's
+#: own example (moderate), a belted 30-year-old driver at 15 km/h frontal (none).
+TIER_EXAMPLES: Final[dict[str, dict[str, Any]]] = {
+    "high": {
+        "event_id": "tsp-high",
+        "occurred_at": "2026-11-23T08:15:30Z",
+        "crash": {"pulse": {"kind": "summary", "delta_v_kmh": 70, "pdof_deg": 0}},
+        "occupants": [
+            {
+                "seat": "driver",
+                "stature_cm": 175,
+                "mass_kg": 78,
+                "age_years": 70,
+                "sex": "male",
+                "belted": False,
+                "frontal_airbag": "absent",
+            }
+        ],
+    },
+    "moderate": README_EXAMPLE,
+    "none": {
+        "event_id": "tsp-none",
+        "occurred_at": "2026-11-23T08:15:30Z",
+        "crash": {"pulse": {"kind": "summary", "delta_v_kmh": 15, "pdof_deg": 0}},
+        "occupants": [
+            {
+                "seat": "driver",
+                "stature_cm": 165,
+                "mass_kg": 62,
+                "age_years": 30,
+                "sex": "female",
+                "belted": True,
+                "frontal_airbag": "not_deployed",
+            }
+        ],
+    },
+}
+
+
 def readme_path() -> Path:
     """``README.md`` of the repository (two levels above this package)."""
     return Path(__file__).resolve().parents[3] / "README.md"
@@ -86,19 +129,20 @@ def _pct_ci(ci: Any) -> str:
     return f"[{100.0 * ci[0]:.1f}, {100.0 * ci[1]:.1f}]"
 
 
-def example_notification() -> CrashNotification:
-    """:data:`README_EXAMPLE` as the engine receives it from the service.
+def example_notification(wire: Mapping[str, Any] = README_EXAMPLE) -> CrashNotification:
+    """A one-occupant summary-pulse notification of the README (:data:`README_EXAMPLE`, or
+    one of :data:`TIER_EXAMPLES`) as the engine receives it from the service.
 
     The wire defaults written out (the service's ``CrashNotificationIn.to_engine``):
     the default vehicle, a left-hand-drive car, single impact, no rollover, the
     body from stature and mass, posture and seat position not sensed. A service
     test holds the README block to the answer of the real HTTP path.
     """
-    occ = README_EXAMPLE["occupants"][0]
-    pulse = README_EXAMPLE["crash"]["pulse"]
+    occ = wire["occupants"][0]
+    pulse = wire["crash"]["pulse"]
     body = nearest_body(occ["stature_cm"], occ["mass_kg"]) or Body.MALE_50TH
     return CrashNotification(
-        event_id=README_EXAMPLE["event_id"],
+        event_id=wire["event_id"],
         vehicle_model=DEFAULT_SET,  # the wire default vehicle
         drive_side=DriveSide.LEFT,
         pulse=SummaryPulse(
@@ -123,8 +167,22 @@ def example_notification() -> CrashNotification:
     )
 
 
+def _decision_doc(decision: Any) -> dict[str, Any]:
+    return {
+        "probability": decision.probability,
+        "probability_ci95": list(decision.probability_ci95),
+        "threshold": decision.threshold,
+        "model": decision.model,
+        "operating_point": decision.operating_point,
+        "recommendation": decision.recommendation,
+        "tier": decision.tier.value if decision.tier is not None else None,
+        "high_threshold": decision.high_threshold,
+    }
+
+
 def example_answer(doc: Mapping[str, Any]) -> dict[str, Any]:
-    """The engine's decision on :data:`README_EXAMPLE` with the field model of `doc`.
+    """The engine's decision on :data:`README_EXAMPLE` and on each of :data:`TIER_EXAMPLES`
+    with the field model of `doc`.
 
     Runs the whole engine (occupant models and surrogates) with the field model
     of the artifact document `doc`, as the service would.
@@ -133,21 +191,71 @@ def example_answer(doc: Mapping[str, Any]) -> dict[str, Any]:
     -------
     dict
         ``probability``, ``probability_ci95``, ``threshold``, ``model``,
-        ``operating_point``, ``recommendation`` of the case's decision.
+        ``operating_point``, ``recommendation``, ``tier``, ``high_threshold`` of the
+        case's decision; ``tiers``: the same of each tier's example, by tier.
     """
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "field.json"
         path.write_text(json.dumps(doc, indent=1, allow_nan=False) + "\n", encoding="utf-8")
         models = load_engine_models(field_artifact=path, warm=False)
-    decision = triage(example_notification(), models).triage
-    return {
-        "probability": decision.probability,
-        "probability_ci95": list(decision.probability_ci95),
-        "threshold": decision.threshold,
-        "model": decision.model,
-        "operating_point": decision.operating_point,
-        "recommendation": decision.recommendation,
+    answer = _decision_doc(triage(example_notification(), models).triage)
+    answer["tiers"] = {
+        tier: _decision_doc(triage(example_notification(wire), models).triage)
+        for tier, wire in TIER_EXAMPLES.items()
     }
+    return answer
+
+
+def _who(wire: Mapping[str, Any]) -> str:
+    """A tier example's notification in words."""
+    occ = wire["occupants"][0]
+    airbag = {"deployed": "airbag deployed", "not_deployed": "airbag not deployed"}.get(
+        occ["frontal_airbag"], "no airbag"
+    )
+    return (
+        f"{'belted' if occ['belted'] else 'unbelted'} {occ['age_years']}-year-old "
+        f"{'man' if occ['sex'] == 'male' else 'woman'}, {airbag}, "
+        f"{wire['crash']['pulse']['delta_v_kmh']} km/h frontal"
+    )
+
+
+def _tier_lines(example: Mapping[str, Any]) -> list[str]:
+    """The README's table of one example per tier (nothing when the answer has none)."""
+    tiers = example.get("tiers")
+    if not tiers:
+        return []
+    lines = [
+        "",
+        "One notification chosen for each risk tier (the `triage` of its answer; the README's "
+        "example above is the moderate one; `models/offline/field/readme.py` holds the "
+        "notifications):",
+        "",
+        "| tier | notification (driver) | P(ISS 15+) [95 % CI] | recommendation |",
+        "|---|---|---|---|",
+    ]
+    for tier, wire in TIER_EXAMPLES.items():
+        a = tiers[tier]
+        lines.append(
+            f"| `{a['tier']}` | {_who(wire)} | {a['probability']:.4f} "
+            f"[{a['probability_ci95'][0]:.4f}, {a['probability_ci95'][1]:.4f}] | "
+            f"{a['recommendation']} |"
+        )
+    high = tiers["high"]
+    lines += [
+        "",
+        'The high and none notifications, to POST as in "Try it":',
+        "",
+        "```json",
+        *(json.dumps(TIER_EXAMPLES[t], separators=(", ", ": ")) for t in ("high", "none")),
+        "```",
+        "",
+        f"`high`: at or above the high-risk threshold ({high['high_threshold']:.2f}, "
+        "`AACN_HIGH_RISK_THRESHOLD`, the CDC 2008 expert panel's 20 %); `moderate`: at or "
+        f"above the operating point's threshold ({high['threshold']:.4f}, "
+        f"`{high['operating_point']}`), vehicle telemetry consistent with severe injury, a "
+        "moderate-risk criterion of the 2021 field triage guideline; `none`: below it.",
+    ]
+    return lines
 
 
 def _score(s: Mapping[str, Any], label: str) -> str:
@@ -210,9 +318,12 @@ def readme_block(doc: Mapping[str, Any], example: Mapping[str, Any]) -> str:
         f"P(ISS 15+) = {example['probability']:.4f} "
         f"[{example['probability_ci95'][0]:.4f}, {example['probability_ci95'][1]:.4f}] "
         f"against the threshold {example['threshold']:.4f} (`{example['model']}`, "
-        f"`{example['operating_point']}`): {example['recommendation']} Delta-V above "
+        f"`{example['operating_point']}`)"
+        + (f", tier `{example['tier']}`" if example.get("tier") else "")
+        + f": {example['recommendation']} Delta-V above "
         f"{data['delta_v_max_kmh']:.0f} km/h (the data's largest) is extrapolated "
         "and said so (`delta_v_extrapolated`).",
+        *_tier_lines(example),
         END,
     ]
     return "\n".join(lines)

@@ -63,8 +63,11 @@ from models.offline.field.risk_run import (
     _diff_ci,
     _document,
     _iss_extras,
+    _oof_threshold_flags,
     _outcome_stage,
+    _tier_extras,
     crash_folds_cached,
+    target_with_margin,
 )
 
 __all__ = ["decision_spec", "fit_decision"]
@@ -140,6 +143,14 @@ def fit_decision(config: RiskConfig, cache_dir: Path | None, regions_from: str) 
     figures = cache.get(
         "decision_extras", lambda: _iss_extras(d, stage, folds, resamples, cfg, nested=False)
     )
+    if "heldout_flags" not in figures:  # figures cached before the tiers' flags were kept
+        figures["heldout_flags"] = {
+            name: _oof_threshold_flags(
+                iss.y, p, folds, target_with_margin(req, float(iss.y.sum()))
+            )
+            for name, req in (("sens85", cfg.sensitivity), ("acs_cot", cfg.acs_cot_sensitivity))
+        }
+    figures["tiers"] = _tier_extras(d, stage, figures, folds, resamples, cfg)
     figures["knowledge"] = cache.get(
         "decision_knowledge",
         lambda: knowledge_extras(d, stage, folds, cfg, PLAIN_COLUMNS, preds["sensed_only"]),

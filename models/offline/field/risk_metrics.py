@@ -16,7 +16,17 @@ from sklearn.metrics import roc_auc_score
 from models.arrays import FloatArray, IntArray
 from models.offline.field.risk_core import logit, weighted_recalibration
 
-__all__ = ["crash_resamples", "score", "triage_figures"]
+__all__ = [
+    "TIER_ORDER",
+    "crash_resamples",
+    "score",
+    "threshold_figures",
+    "tier_figures",
+    "triage_figures",
+]
+
+#: The risk tiers, highest first (``models.tiers``).
+TIER_ORDER = ("high", "moderate", "none")
 
 
 def crash_resamples(crash: IntArray, n: int, seed: int) -> list[IntArray]:
@@ -131,4 +141,116 @@ def triage_figures(
         reps = [figures(ix) for ix in resamples]
         for k in list(out):
             out[f"{k}_ci95"] = _ci([r[k] for r in reps])
+    return out
+
+
+def _ratio(num: float, den: float) -> float:
+    return num / den if den > 0 else float("nan")
+
+
+def tier_figures(
+    y: FloatArray,
+    p: FloatArray,
+    flagged: np.ndarray,
+    w: FloatArray,
+    high_threshold: float,
+    resamples: Sequence[IntArray] | None,
+) -> dict[str, Any]:
+    """Held-out figures of each risk tier, unweighted (the sample) and weighted, with CIs.
+
+    The tiers as served (``models.tiers.tier_of``): ``high`` = flagged at the operating
+    point and ``p >= high_threshold``; ``moderate`` = flagged, below it; ``none`` = not
+    flagged.
+
+    Parameters
+    ----------
+    y, p, w : ndarray, shape (n,)
+        Outcome (ISS 15+), held-out probability, survey weight.
+    flagged : ndarray of bool, shape (n,)
+        Held-out flags of the operating point.
+    high_threshold : float
+    resamples : sequence of index arrays, or None (no intervals)
+
+    Returns
+    -------
+    dict
+        Per tier: ``n`` and ``positives`` (the sample's counts); ``sensitivity`` and
+        ``sensitivity_weighted``: the share of ISS 15+ occupants in the tier;
+        ``sensitivity_at_or_above`` (and weighted): in the tier or a higher one;
+        ``ppv``, ``ppv_weighted``: the share of the tier's occupants ISS 15+;
+        ``flagged``, ``flagged_weighted``: the tier's share of all occupants (of the
+        sample; weighted: of US towaway-crash occupants). Each with ``_ci95``.
+    """
+    flagged = np.asarray(flagged, dtype=bool)
+    high = flagged & (p >= high_threshold)
+    members = {"high": high, "moderate": flagged & ~high, "none": ~flagged}
+    at_or_above = {"high": high, "moderate": flagged, "none": np.ones(y.size, dtype=bool)}
+
+    def figures(ix: np.ndarray, tier: str) -> dict[str, float]:
+        yy, ww = y[ix] > 0, w[ix]
+        m, up = members[tier][ix], at_or_above[tier][ix]
+        return {
+            "sensitivity": _ratio(float((m & yy).sum()), float(yy.sum())),
+            "sensitivity_weighted": _ratio(float(ww[m & yy].sum()), float(ww[yy].sum())),
+            "sensitivity_at_or_above": _ratio(float((up & yy).sum()), float(yy.sum())),
+            "sensitivity_at_or_above_weighted": _ratio(
+                float(ww[up & yy].sum()), float(ww[yy].sum())
+            ),
+            "ppv": _ratio(float((m & yy).sum()), float(m.sum())),
+            "ppv_weighted": _ratio(float(ww[m & yy].sum()), float(ww[m].sum())),
+            "flagged": _ratio(float(m.sum()), float(m.size)),
+            "flagged_weighted": _ratio(float(ww[m].sum()), float(ww.sum())),
+        }
+
+    everyone = np.arange(y.size)
+    out: dict[str, Any] = {}
+    for tier in TIER_ORDER:
+        res: dict[str, Any] = {
+            "n": int(members[tier].sum()),
+            "positives": int((members[tier] & (y > 0)).sum()),
+            **figures(everyone, tier),
+        }
+        if resamples is not None:
+            reps = [figures(ix, tier) for ix in resamples]
+            for k in list(res):
+                if k not in ("n", "positives"):
+                    res[f"{k}_ci95"] = _ci([r[k] for r in reps])
+        out[tier] = res
+    return out
+
+
+def threshold_figures(
+    y: FloatArray,
+    p: FloatArray,
+    w: FloatArray,
+    threshold: float,
+    resamples: Sequence[IntArray] | None,
+) -> dict[str, Any]:
+    """Sensitivity, specificity, PPV and flagged share of ``p >= threshold``, unweighted and
+    weighted, with CIs (the vehicle answer at the CDC panel's 0.20, beside OnStar's ISP)."""
+    flagged = p >= threshold
+
+    def figures(ix: np.ndarray) -> dict[str, float]:
+        yy, ff, ww = y[ix] > 0, flagged[ix], w[ix]
+        return {
+            "sensitivity": _ratio(float((ff & yy).sum()), float(yy.sum())),
+            "sensitivity_weighted": _ratio(float(ww[ff & yy].sum()), float(ww[yy].sum())),
+            "specificity": _ratio(float((~ff & ~yy).sum()), float((~yy).sum())),
+            "specificity_weighted": _ratio(float(ww[~ff & ~yy].sum()), float(ww[~yy].sum())),
+            "ppv": _ratio(float((ff & yy).sum()), float(ff.sum())),
+            "ppv_weighted": _ratio(float(ww[ff & yy].sum()), float(ww[ff].sum())),
+            "flagged_weighted": _ratio(float(ww[ff].sum()), float(ww.sum())),
+        }
+
+    out: dict[str, Any] = {
+        "threshold": threshold,
+        "n": int(y.size),
+        "positives": int((y > 0).sum()),
+        **figures(np.arange(y.size)),
+    }
+    if resamples is not None:
+        reps = [figures(ix) for ix in resamples]
+        for k in list(out):
+            if k not in ("threshold", "n", "positives"):
+                out[f"{k}_ci95"] = _ci([r[k] for r in reps])
     return out

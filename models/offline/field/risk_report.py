@@ -27,12 +27,34 @@ from models.offline.field.risk_run import RiskFit
 from models.offline.paths import docs_dir
 from models.units import kmh_to_mph
 
-__all__ = ["ONSTAR_VEHICLE_AUC", "acceptance", "default_report_dir", "write_risk_model_card"]
+__all__ = [
+    "ISP_SENSITIVITY",
+    "ISP_SPECIFICITY",
+    "ONSTAR_VEHICLE_AUC",
+    "acceptance",
+    "default_report_dir",
+    "tier_lines",
+    "write_risk_model_card",
+]
 
 #: OnStar's published vehicle-level injury severity prediction, AUC 0.84
 #: (crash-data-and-triage.md, field anchors) [V]: a published anchor to compare
 #: with, not a target.
 ONSTAR_VEHICLE_AUC: Final[float] = 0.84
+
+#: OnStar's injury severity prediction (ISP) at its 0.20 cut, vehicle level (anyone ISS
+#: 15+): sensitivity 40 %, specificity 98 % (Kononen, Flannagan & Wang 2011, Accid Anal
+#: Prev 43:112-122; crash-data-and-triage.md, field anchors) [V]: the published point the
+#: vehicle answer at the CDC panel's 20 % stands beside.
+ISP_SENSITIVITY: Final[float] = 0.40
+ISP_SPECIFICITY: Final[float] = 0.98
+
+#: What each tier means, for the card.
+TIER_RULES: Final[dict[str, str]] = {
+    "high": "P >= the high-risk threshold (and flagged)",
+    "moderate": "flagged, below the high-risk threshold",
+    "none": "not flagged",
+}
 
 #: Plot files written beside the card.
 PLOTS: Final[dict[str, str]] = {
@@ -408,6 +430,66 @@ def _operating_points(doc: dict[str, Any]) -> list[str]:
     return lines
 
 
+def _fig(x: dict[str, Any], key: str, pct: bool = True) -> str:
+    """A figure with its interval where the document has one."""
+    ci = x.get(f"{key}_ci95")
+    if pct:
+        return _pct(x[key]) + (f" {_pct_ci(ci)}" if ci else "")
+    return _f(x[key]) + (f" {_ci(ci)}" if ci else "")
+
+
+def tier_lines(doc: dict[str, Any]) -> list[str]:
+    """The card's section on the risk tiers (``models.tiers``); none for an artifact
+    fitted before the tiers' figures."""
+    tiers = doc.get("tiers")
+    if not tiers:
+        return []
+    h, high = tiers["heldout"], tiers["high_threshold"]
+    v = tiers["vehicle_at_high_threshold"]
+    lines = [
+        f"Each decision has a risk tier: `high` at or above the high-risk threshold ({high:.2f}, "
+        "the CDC 2008 expert panel's 'high risk of severe injury', `AACN_HIGH_RISK_THRESHOLD`) "
+        "and flagged; `moderate` flagged by the operating point "
+        f"(`{tiers['operating_point']}`), below it (the 2021 field triage guideline's "
+        "moderate-risk telemetry criterion); `none` not flagged. Held out by crash (the "
+        "operating point's threshold chosen inside each training part, as its figures above); "
+        "sensitivity: the share of the ISS 15+ occupants in the tier; PPV: the share of the "
+        "tier's occupants with ISS 15+; flagged weighted: the tier's share of US towaway-crash "
+        "occupants:",
+        "",
+        "| tier | rule | occupants (ISS 15+) | sensitivity | sensitivity weighted | "
+        "at or above: sensitivity, weighted | PPV (sample) | PPV weighted | flagged weighted |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    for tier in ("high", "moderate", "none"):
+        t = h[tier]
+        lines.append(
+            f"| `{tier}` | {TIER_RULES[tier]} | {t['n']:,} ({t['positives']:,}) | "
+            f"{_fig(t, 'sensitivity')} | {_fig(t, 'sensitivity_weighted')} | "
+            f"{_pct(t['sensitivity_at_or_above'])}, "
+            f"{_pct(t['sensitivity_at_or_above_weighted'])} | {_fig(t, 'ppv')} | "
+            f"{_fig(t, 'ppv_weighted')} | {_fig(t, 'flagged_weighted')} |"
+        )
+    lines += [
+        "",
+        f"The vehicle's P(anyone ISS 15+) at {v['threshold']:.2f}, held out "
+        f"({v['n']:,} vehicles, {v['positives']:,} with an ISS 15+ occupant), beside OnStar's "
+        "published injury severity prediction at the same cut (Kononen, Flannagan & Wang "
+        "2011; its own sample, NASS-CDS 1999-2008, MY 2000+, planar crashes: a published "
+        "anchor, not a target):",
+        "",
+        "| vehicle at 0.20 | sensitivity | specificity | PPV | flagged weighted |",
+        "|---|---|---|---|---|",
+        f"| this model, sample | {_fig(v, 'sensitivity')} | {_fig(v, 'specificity')} | "
+        f"{_fig(v, 'ppv')} | - |",
+        f"| this model, weighted | {_fig(v, 'sensitivity_weighted')} | "
+        f"{_fig(v, 'specificity_weighted')} | {_fig(v, 'ppv_weighted')} | "
+        f"{_fig(v, 'flagged_weighted')} |",
+        f"| OnStar ISP (published) | {_pct(ISP_SENSITIVITY)} | {_pct(ISP_SPECIFICITY)} | - | - |",
+    ]
+    return lines
+
+
 def _temporal(doc: dict[str, Any]) -> list[str]:
     drift = doc["drift"]
     lines = [
@@ -560,6 +642,7 @@ def _card(doc: dict[str, Any]) -> str:
         "",
         f"![risk curves]({PLOTS['curves']})",
         "",
+        *(["## Risk tiers (held out)", *tier_lines(doc), ""] if doc.get("tiers") else []),
         "## P(anyone in the vehicle ISS 15+)",
         f"Held out by crash: {v['n']:,} vehicles, {v['positives']:,} with an ISS 15+ occupant; AUC "
         f"{_f(v['auc'])} {_ci(v['auc_ci95'])}, weighted {_f(v['auc_weighted'])} "

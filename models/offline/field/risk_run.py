@@ -65,7 +65,14 @@ from models.offline.field.risk_knowledge import (
     measured_extras,
     measured_oof,
 )
-from models.offline.field.risk_metrics import crash_resamples, score, triage_figures
+from models.offline.field.risk_metrics import (
+    crash_resamples,
+    score,
+    threshold_figures,
+    tier_figures,
+    triage_figures,
+)
+from models.tiers import HIGH_RISK_THRESHOLD
 from models.units import kmh_to_mph
 
 __all__ = ["MODEL_NAME", "MODEL_VERSION", "RiskFit", "fit_risk"]
@@ -396,6 +403,7 @@ def fit_risk(config: RiskConfig | None = None, cache_dir: Path | None = None) ->
     figures = cache.get(
         "iss_extras", lambda: _iss_extras(d, stages["iss15"], folds, resamples, cfg)
     )
+    figures["tiers"] = _tier_extras(d, stages["iss15"], figures, folds, resamples, cfg)
     for o in d.outcomes:
         st = stages[o.name]
 
@@ -480,6 +488,7 @@ def _iss_extras(
     out["nhtsa_mais3_curve_on_mais3_2010_2014"] = score(mais3, nhtsa, w, None, recent)
     # operating points: thresholds on all held-out predictions (served), and held out
     points = {}
+    flags_of: dict[str, np.ndarray] = {}
     for name, req in (("sens85", cfg.sensitivity), ("acs_cot", cfg.acs_cot_sensitivity)):
         target = target_with_margin(req, float(y.sum()))
         t = threshold_for_sensitivity(y, p, target)
@@ -491,6 +500,7 @@ def _iss_extras(
         else:
             flags = _oof_threshold_flags(y, p, folds, target)
             t_tr = threshold_for_sensitivity(y[tr], p[tr], target)
+        flags_of[name] = flags
         old_target = target_with_margin(req, float(y.sum()) / cfg.n_splits)
         t_old = threshold_for_sensitivity(y, p, old_target)
         points[name] = {
@@ -509,6 +519,7 @@ def _iss_extras(
             "threshold_method": "nested" if nested else "other_folds_heldout",
         }
     out["operating_points"] = points
+    out["heldout_flags"] = flags_of  # the risk tiers' figures (_tier_extras)
     # the vehicle answer
     pv, anyone, vw, vcrash, z = _vehicle_heldout(d, y, p, folds)
     vres = crash_resamples(vcrash, cfg.n_metric_bootstrap, cfg.seed + 3)
@@ -522,6 +533,42 @@ def _iss_extras(
     out["vehicle_bootstrap_calibration"] = [list(t) for t in boots]
     out["vehicle_oof"] = pv
     return out
+
+
+#: The operating point whose held-out flags the risk tiers' figures use (the default).
+TIER_OPERATING_POINT: Final[str] = "sens85"
+
+
+def _tier_extras(
+    d: RiskData,
+    stage: dict[str, Any],
+    extras: dict[str, Any],
+    folds: Sequence[tuple[IntArray, IntArray]],
+    resamples: Sequence[IntArray],
+    cfg: RiskConfig,
+) -> dict[str, Any]:
+    """Held-out figures of the risk tiers (``models.tiers``) at the default operating point,
+    and of the vehicle answer at the high-risk threshold (beside OnStar's ISP at 0.20).
+
+    The occupants' tiers are those served: flagged by the operating point held out
+    (threshold chosen inside each training part), high where the held-out probability
+    is also at or above :data:`models.tiers.HIGH_RISK_THRESHOLD`.
+    """
+    y, w, p = d.outcomes[0].y, d.w, stage["oof"]
+    flags = extras.get("heldout_flags", {}).get(TIER_OPERATING_POINT)
+    if flags is None:  # figures cached before the tiers: the same flags, computed again
+        target = target_with_margin(cfg.sensitivity, float(y.sum()))
+        flags = _heldout_operating_point(d, y, stage["spec"], folds, target, cfg)
+    _, anyone, vw, vcrash = vehicle_table(d, y)
+    vres = crash_resamples(vcrash, cfg.n_metric_bootstrap, cfg.seed + 3)  # as the vehicle's
+    return {
+        "operating_point": TIER_OPERATING_POINT,
+        "high_threshold": HIGH_RISK_THRESHOLD,
+        "heldout": tier_figures(y, p, flags, w, HIGH_RISK_THRESHOLD, resamples),
+        "vehicle_at_high_threshold": threshold_figures(
+            anyone, extras["vehicle_oof"], vw, HIGH_RISK_THRESHOLD, vres
+        ),
+    }
 
 
 def kmh_to_mph_array(d: RiskData) -> FloatArray:
@@ -661,6 +708,7 @@ def _document(
             "figures": _round(extras["measured"]),
         },
         "default_operating_point": "sens85",
+        "tiers": _round(extras["tiers"]),
         "comparisons": _round(
             {k: extras[k] for k in ("boosted", "legacy_2_0_0", "nhtsa_mais3_curve")}
             | {

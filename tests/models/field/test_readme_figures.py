@@ -16,6 +16,7 @@ from models.offline.field.readme import (
     BEGIN,
     END,
     README_EXAMPLE,
+    TIER_EXAMPLES,
     example_answer,
     readme_block,
     readme_path,
@@ -48,3 +49,15 @@ def test_the_example_is_answered_by_the_iss15_model(answer: dict[str, object]) -
     and ISS 15+ is rarer than MAIS 3+."""
     assert answer["model"] == f"field_iss15@{DOC['model']['version']}"
     assert float(answer["probability"]) < 0.05  # type: ignore[arg-type]
+
+
+@pytest.mark.parametrize("tier", ["high", "moderate", "none"])
+def test_each_tier_example_lands_in_its_tier(answer: dict[str, object], tier: str) -> None:
+    """The README shows one notification per tier, chosen for the tier it must show; the
+    moderate one is the README's own example (2.0 % against the 1.8 % threshold)."""
+    tiers = answer["tiers"]
+    assert isinstance(tiers, dict)
+    assert tiers[tier]["tier"] == tier
+    assert "Level I" not in tiers[tier]["recommendation"]
+    assert TIER_EXAMPLES["moderate"] == README_EXAMPLE
+    assert answer["tier"] == "moderate"

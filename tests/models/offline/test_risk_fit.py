@@ -100,6 +100,12 @@ def test_a_reduced_fit_writes_an_artifact_card_and_readme_block_that_agree(
         assert (tmp_path / "card" / png).stat().st_size > 1000
     iss = doc["outcomes"]["iss15"]
     assert f"{iss['heldout']['auc']:.3f}" in text
+    # the risk tiers' held-out figures: the tiers partition the occupants
+    tiers = doc["tiers"]["heldout"]
+    assert sum(tiers[t]["n"] for t in ("high", "moderate", "none")) == doc["data"]["rows"]
+    assert "## Risk tiers (held out)" in text
+    assert "| OnStar ISP (published) | 40.0 % | 98.0 % |" in text
+    assert doc["tiers"]["vehicle_at_high_threshold"]["threshold"] == 0.2
     example = {
         "probability": 0.01,
         "probability_ci95": [0.005, 0.02],
