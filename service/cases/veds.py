@@ -113,15 +113,18 @@ NOT_IN_VEDS: Final[tuple[tuple[str, AssumptionCode], ...]] = (
 
 
 #: xsd:decimal's lexical form (no exponent, no underscores, no NaN), ASCII digits only
-#: (``\d`` would take any Unicode digit, ``٤٠`` or ``４０``). Any number of decimals: an
-#: exact KPH twin of an MPH value has six more than it; the length is capped below.
-_DECIMAL = re.compile(r"^[+-]?([0-9]{1,12}(\.[0-9]*)?|\.[0-9]+)$")
+#: (``\d`` would take any Unicode digit, ``٤٠`` or ``４０``). Any number of digits, leading
+#: zeros and decimals (an exact KPH twin of an MPH value has six more decimals than it),
+#: as XML Schema allows: the length is capped below, the value checked against the limits.
+_DECIMAL = re.compile(r"[+-]?([0-9]+(\.[0-9]*)?|\.[0-9]+)")
 #: Longest number text, characters. [R] Far beyond any sensor's precision (an MPH
 #: value with 12 decimals is 22 characters as KPH); bounds the decimal arithmetic.
 _MAX_DECIMAL_CHARS: Final = 64
 
 
-_SMALL_INT = re.compile(r"^\+?[0-9]{1,3}$")
+#: xsd:integer's lexical form, ASCII digits only (leading zeros allowed); the length is
+#: capped as a decimal's, the value checked where it is read.
+_INTEGER = re.compile(r"[+-]?[0-9]+")
 #: A model year (``nc:ItemModelYearDate``, an xs:gYear): four ASCII digits.
 _YEAR = re.compile(r"^[0-9]{4}$")
 
@@ -130,6 +133,11 @@ _EVENT_ID = re.compile(r"^[\x21-\x7e]{1,128}$")
 
 
 _BOOLEANS: Final = {"true": True, "1": True, "false": False, "0": False}
+
+
+def _is_integer(text: str) -> bool:
+    """An xsd:integer in ASCII digits, no longer than the number length cap."""
+    return len(text) <= _MAX_DECIMAL_CHARS and _INTEGER.fullmatch(text) is not None
 
 
 def _said(flag: bool | None) -> str:
@@ -299,7 +307,7 @@ def _pulse(m: _Mapper, pulse: Element, path: str) -> _Pulse:
     measure = m.need(pulse, "veds:CrashPulseChangeInVelocityMeasure", path)
     value_text = m.need_text(measure, "nc:MeasurePointValue", measure_path)
     unit = m.need_text(measure, "nc:MeasureUnitText", measure_path)
-    if len(value_text) > _MAX_DECIMAL_CHARS or not _DECIMAL.match(value_text):
+    if len(value_text) > _MAX_DECIMAL_CHARS or not _DECIMAL.fullmatch(value_text):
         raise _refuse(
             f"{measure_path}/nc:MeasurePointValue",
             f"{value_text!r} is not a decimal number",
@@ -326,17 +334,17 @@ def _pulse(m: _Mapper, pulse: Element, path: str) -> _Pulse:
         )
     pdof_path = f"{path}/veds:CrashPulsePrincipalDirectionOfForceValue"
     clock = m.need_text(pulse, "veds:CrashPulsePrincipalDirectionOfForceValue", path)
-    if not _SMALL_INT.match(clock) or not 1 <= int(clock) <= 12:
+    if not _is_integer(clock) or not 1 <= int(clock) <= 12:
         raise _refuse(
             pdof_path, f"{clock!r} is not a clock direction 1-12 (12 frontal)", "veds_clock"
         )
     turns_text = m.text(pulse, "veds:CrashPulseRolloverQuarterTurnsValue", path, required=False)
     turns = 0
     if turns_text is not None:
-        if not _SMALL_INT.match(turns_text):
+        if not _is_integer(turns_text) or int(turns_text) < 0:
             raise _refuse(
                 f"{path}/veds:CrashPulseRolloverQuarterTurnsValue",
-                f"{turns_text!r} is not a non-negative integer below 1000",
+                f"{turns_text!r} is not a non-negative integer",
                 "veds_number",
             )
         turns = int(turns_text)
