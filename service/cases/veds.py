@@ -408,7 +408,15 @@ def _crash(
             f"{len(read)} pulses",
         )
     rolled = m.boolean(vehicle, "veds:VehicleRolloverIndicator", vehicle_path, required=False)
-    turns = max(p.quarter_turns for p in read)
+    most_turns = max(read, key=lambda p: p.quarter_turns)  # the first of equals
+    turns = most_turns.quarter_turns
+    if turns > 0:  # an error on the field names this element
+        m.map(
+            f"{most_turns.path}/veds:CrashPulseRolloverQuarterTurnsValue",
+            "crash.rollover_quarter_turns",
+            turns,
+            "the most quarter turns of any pulse",
+        )
     rollover = bool(rolled) or turns > 0
     m.map(
         f"{vehicle_path}/veds:VehicleRolloverIndicator"

@@ -402,6 +402,22 @@ def test_a_document_the_notification_cannot_take_is_422_naming_the_element(
     assert _case_count(api) == 0
 
 
+@pytest.mark.parametrize("pulse", [1, 2])
+def test_quarter_turns_beyond_the_limit_name_their_veds_element(api: ApiClient, pulse: int) -> None:
+    raw = _doc("kph-rollover-two-pulses.xml")
+    written = (b">0</" if pulse == 1 else b">4</") + b"veds:CrashPulseRolloverQuarterTurnsValue>"
+    assert raw.count(written) == 1
+    raw = raw.replace(written, b">999</veds:CrashPulseRolloverQuarterTurnsValue>")
+    problem = assert_problem(_post_veds(api, raw), 422)
+    element = (
+        f"veds:Crash/veds:CrashVehicle/veds:VehicleCrashPulse[{pulse}]"
+        "/veds:CrashPulseRolloverQuarterTurnsValue"
+    )
+    assert [e["field"] for e in problem["errors"]] == [element], problem
+    assert "40" in problem["errors"][0]["reason"]
+    assert _case_count(api) == 0
+
+
 def test_a_document_without_a_pulse_or_an_occupied_seat_is_422(api: ApiClient) -> None:
     raw = _doc("kph-frontal.xml")
     start, end = raw.index(b"<veds:VehicleCrashPulse>"), raw.index(b"</veds:VehicleCrashPulse>")
