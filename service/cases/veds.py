@@ -410,12 +410,17 @@ def _crash(
     rolled = m.boolean(vehicle, "veds:VehicleRolloverIndicator", vehicle_path, required=False)
     most_turns = max(read, key=lambda p: p.quarter_turns)  # the first of equals
     turns = most_turns.quarter_turns
+    turns_path = f"{most_turns.path}/veds:CrashPulseRolloverQuarterTurnsValue"
     if turns > 0:  # an error on the field names this element
         m.map(
-            f"{most_turns.path}/veds:CrashPulseRolloverQuarterTurnsValue",
-            "crash.rollover_quarter_turns",
-            turns,
-            "the most quarter turns of any pulse",
+            turns_path, "crash.rollover_quarter_turns", turns, "the most quarter turns of any pulse"
+        )
+    if rolled is False and turns > 0:  # the JSON rule: explicit false with turns is refused
+        raise _refuse(
+            turns_path,
+            f"{turns} quarter turns contradict veds:VehicleRolloverIndicator false (a quarter "
+            "turn is a rollover)",
+            "veds_rollover_contradiction",
         )
     rollover = bool(rolled) or turns > 0
     m.map(

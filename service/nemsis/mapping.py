@@ -468,9 +468,13 @@ def _collision_group(facts: _Facts, parent: etree._Element, i: int) -> None:
     w.add(group, "eInjury.24", str(pdof_clock_hour(pulse.pdof_deg)))
     note.fill("eInjury.24", "result.pulse.pdof_deg (clock hour)")
     rollover = facts.given("crash.rollover")
+    turns = facts.given("crash.rollover_quarter_turns")
     if isinstance(rollover, bool):
         w.add(group, "eInjury.25", codes.ACN_YES_NO[rollover])
         note.fill("eInjury.25", "crash.rollover")
+    elif isinstance(turns, int) and not isinstance(turns, bool) and turns > 0:
+        w.add(group, "eInjury.25", codes.ACN_YES_NO[True])  # a quarter turn is a rollover
+        note.fill("eInjury.25", "crash.rollover_quarter_turns (above 0: yes)")
     else:
         note.leave_out("eInjury.25", "rollover not reported")
     for seat in range(len(case.result.occupants)):

@@ -339,6 +339,16 @@ def test_rollover_multiple_impacts_and_the_decision(api: ApiClient) -> None:
     assert _text(group, "n:eInjury.24") == "12"  # 345 deg: nearer 12 than 11
 
 
+def test_quarter_turns_alone_say_there_was_a_rollover(api: ApiClient) -> None:
+    body = summary(40.0, 0.0)
+    del body["crash"]["rollover"]
+    body["crash"]["rollover_quarter_turns"] = 2
+    r, tree = _record(api, post_case(api, body)["case_id"])
+    (pcr,) = _reports(tree)
+    assert _text(pcr, "n:eInjury/n:eInjury.CollisionGroup/n:eInjury.25") == "Y"
+    assert "eInjury.25" not in r.headers["NEMSIS-Left-Out"]
+
+
 def test_an_impact_count_alone_says_whether_there_were_multiple_impacts(api: ApiClient) -> None:
     for count, code in ((3, "9923003"), (1, "9923001")):
         body = summary(40.0, 0.0)
