@@ -59,6 +59,7 @@ class AssumptionCode(StrEnum):
     VEDS_FRONTAL_AIRBAG_NOT_REPORTED = "veds_frontal_airbag_not_reported"
     VEDS_VEHICLE_CLASS_ASSUMED = "veds_vehicle_class_assumed"
     VEDS_DRIVE_SIDE_ASSUMED = "veds_drive_side_assumed"
+    VEDS_MODEL_YEAR_DROPPED = "veds_model_year_dropped"
 
 
 #: What each code means and what an integrator may do about it.
@@ -204,6 +205,11 @@ DESCRIPTIONS: Final[dict[AssumptionCode, str]] = {
     AssumptionCode.VEDS_DRIVE_SIDE_ASSUMED: (
         "VEDS: no drive side in the document: left-hand drive assumed (seat code 1, the "
         "driver, on the left)."
+    ),
+    AssumptionCode.VEDS_MODEL_YEAR_DROPPED: (
+        "VEDS: the model year (nc:ItemModelYearDate) is not four ASCII digits from 1950 to "
+        "2100: it was dropped, and the crash triaged without it (the field risk models then "
+        "take their median year: model_year_imputed)."
     ),
 }
 

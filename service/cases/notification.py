@@ -72,7 +72,7 @@ MAX_CLOCK_SKEW = timedelta(minutes=10)
 #: An RFC 3339 date-time with its offset ("2026-11-23T08:15:30Z"). pydantic alone
 #: takes a bare number, or a string of digits, as a Unix time (fuzzing findings:
 #: ``occurred_at: 0`` or ``"1"``; ``received_from=0.5`` listed every case).
-_RFC3339 = re.compile(r"^\d{4}-\d{2}-\d{2}[Tt ]\d{2}:\d{2}")
+_RFC3339 = re.compile(r"^[0-9]{4}-[0-9]{2}-[0-9]{2}[Tt ][0-9]{2}:[0-9]{2}")
 
 
 _LAX_AWARE = TypeAdapter(AwareDatetime)

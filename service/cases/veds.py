@@ -64,6 +64,7 @@ __all__ = [
     "clock_to_pdof_deg",
     "delta_v_to_kmh",
     "is_veds_media_type",
+    "is_xsd_decimal",
     "read_veds",
 ]
 
@@ -126,13 +127,21 @@ _MAX_DECIMAL_CHARS: Final = 64
 #: capped as a decimal's, the value checked where it is read.
 _INTEGER = re.compile(r"[+-]?[0-9]+")
 #: A model year (``nc:ItemModelYearDate``, an xs:gYear): four ASCII digits.
-_YEAR = re.compile(r"^[0-9]{4}$")
+_YEAR = re.compile(r"[0-9]{4}")
+#: The model years the notification takes (``vehicle.model_year``).
+MIN_MODEL_YEAR: Final = 1950
+MAX_MODEL_YEAR: Final = 2100
 
 
 _EVENT_ID = re.compile(r"^[\x21-\x7e]{1,128}$")
 
 
 _BOOLEANS: Final = {"true": True, "1": True, "false": False, "0": False}
+
+
+def is_xsd_decimal(text: str) -> bool:
+    """An xsd:decimal in ASCII digits, no longer than the number length cap."""
+    return len(text) <= _MAX_DECIMAL_CHARS and _DECIMAL.fullmatch(text) is not None
 
 
 def _is_integer(text: str) -> bool:
@@ -307,7 +316,7 @@ def _pulse(m: _Mapper, pulse: Element, path: str) -> _Pulse:
     measure = m.need(pulse, "veds:CrashPulseChangeInVelocityMeasure", path)
     value_text = m.need_text(measure, "nc:MeasurePointValue", measure_path)
     unit = m.need_text(measure, "nc:MeasureUnitText", measure_path)
-    if len(value_text) > _MAX_DECIMAL_CHARS or not _DECIMAL.fullmatch(value_text):
+    if not is_xsd_decimal(value_text):
         raise _refuse(
             f"{measure_path}/nc:MeasurePointValue",
             f"{value_text!r} is not a decimal number",
@@ -664,11 +673,29 @@ def _event_id(m: _Mapper, crash: Element, crash_path: str, raw: bytes) -> str:
     return digest
 
 
+def _model_year(m: _Mapper, vehicle: Element, vehicle_path: str) -> str | None:
+    """The model year as written, when it is one (four ASCII digits, 1950-2100).
+
+    Anything else is dropped with an assumption naming the element: a malformed year
+    must not cost the crash its triage, and is never handed on (NEMSIS eInjury.20).
+    """
+    year = m.text(vehicle, "nc:ItemModelYearDate", vehicle_path, required=False)
+    if year is None or (_YEAR.fullmatch(year) and MIN_MODEL_YEAR <= int(year) <= MAX_MODEL_YEAR):
+        return year
+    m.assume(
+        AssumptionCode.VEDS_MODEL_YEAR_DROPPED,
+        f"{vehicle_path}/nc:ItemModelYearDate {year[:_MAX_DECIMAL_CHARS]!r} is not a model year "
+        f"(four ASCII digits, {MIN_MODEL_YEAR}-{MAX_MODEL_YEAR}): dropped",
+        field="vehicle.model_year",
+    )
+    return None
+
+
 def _vehicle_facts(m: _Mapper, vehicle: Element, vehicle_path: str) -> dict[str, str | None]:
     facts = {
         "make": m.text(vehicle, "nc:ItemMakeName", vehicle_path, required=False),
         "model": m.text(vehicle, "nc:ItemModelName", vehicle_path, required=False),
-        "model_year": m.text(vehicle, "nc:ItemModelYearDate", vehicle_path, required=False),
+        "model_year": _model_year(m, vehicle, vehicle_path),
         "body_category_code": m.text(
             vehicle, "j:VehicleBodyCategoryCode", vehicle_path, required=False
         ),
@@ -762,10 +789,10 @@ def read_veds(raw: bytes, *, received_at: datetime) -> VedsNotification:
         "crash": crash_doc,
         "occupants": occupants,
     }
-    year = vehicle_facts["model_year"]
-    if year is not None and _YEAR.match(year.strip()) and 1950 <= int(year.strip()) <= 2100:
-        document["vehicle"] = {"model_year": int(year.strip())}
-        m.map(f"{vehicle_path}/nc:ItemModelYearDate", "vehicle.model_year", int(year.strip()))
+    year = vehicle_facts["model_year"]  # a model year, or None (_model_year)
+    if year is not None:
+        document["vehicle"] = {"model_year": int(year)}
+        m.map(f"{vehicle_path}/nc:ItemModelYearDate", "vehicle.model_year", int(year))
     try:
         notification = CrashNotificationIn.model_validate_json(json.dumps(document), strict=True)
     except ValidationError as exc:

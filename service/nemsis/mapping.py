@@ -163,7 +163,7 @@ class NemsisRecord:
 
 def _element_order(name: str) -> tuple[str, int]:
     section, _, number = name.partition(".")
-    return section, int(number) if number.isdigit() else 0
+    return section, int(number) if re.fullmatch(r"[0-9]{1,9}", number) else 0
 
 
 def report_uuid(case_id: str, occupant: int) -> str:
@@ -412,7 +412,8 @@ def _vehicle_facts(facts: _Facts) -> dict[str, str]:
         else:
             facts.leave_out(element, f"no vehicle {key.replace('_', ' ')} in the notification")
     year = vehicle.get("model_year")
-    if isinstance(year, str) and re.fullmatch(r"\d{4}", year.strip()):
+    # four ASCII digits: a case stored with another script's digits ("٢٠١٠") is left out
+    if isinstance(year, str) and re.fullmatch(r"[0-9]{4}", year.strip()):
         if YEAR_RANGE[0] <= int(year) <= YEAR_RANGE[1]:
             out["eInjury.20"] = year.strip()
             facts.fill("eInjury.20", "source_mapping.vehicle.model_year")

@@ -14,6 +14,7 @@ sign-in form and no case data.
 from __future__ import annotations
 
 import hmac
+import re
 import time
 from datetime import UTC, datetime
 from typing import Any
@@ -255,7 +256,8 @@ def case_list(request: Request, ctx: ContextDep) -> Response:
         if impact and impact not in {m.value for m in ImpactMode}:
             raise ValueError(f"Unknown impact mode {impact!r}.")
         limit_text = echo["limit"].strip()
-        if limit_text and not (limit_text.isdigit() and int(limit_text) >= 1):
+        # ASCII digits only (str.isdigit takes "²", which int() refuses), a bounded length
+        if limit_text and not (re.fullmatch(r"[0-9]{1,9}", limit_text) and int(limit_text) >= 1):
             raise ValueError("Per page must be a whole number of at least 1.")
         page = min(
             int(limit_text) if limit_text else settings.page_default_limit, settings.page_max_limit

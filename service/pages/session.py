@@ -25,6 +25,7 @@ import binascii
 import hashlib
 import hmac
 import json
+import re
 import secrets
 from dataclasses import dataclass
 from urllib.parse import urlsplit
@@ -129,7 +130,7 @@ def check_login_csrf(
     if not message or not hmac.compare_digest(mac, _mac(secret, "login", message)):
         return False
     issued, _, _ = message.partition(":")
-    return issued.isdigit() and now - int(issued) <= LOGIN_CSRF_TTL_S
+    return bool(re.fullmatch(r"[0-9]{1,12}", issued)) and now - int(issued) <= LOGIN_CSRF_TTL_S
 
 
 def same_origin(request: Request) -> bool:

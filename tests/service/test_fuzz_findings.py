@@ -407,6 +407,9 @@ def test_keys_revoke_by_name_or_id_is_enforced_at_once(
     h_b = {"Authorization": f"Bearer {key_b}"}
     assert_problem(client.post("/v1/cases", json=summary(), headers=h_b), 401)
     assert cli.main(["keys", "revoke", "no-such-key"]) == 1
+    for other_digits in ("²", "٢", "１"):  # digits str.isdigit takes and int() may not
+        assert cli.main(["keys", "revoke", other_digits]) == 1
+        assert f"no API key named or numbered {other_digits!r}" in capsys.readouterr().err
 
 
 def test_keys_rotate_replaces_the_secret_at_once(

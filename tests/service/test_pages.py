@@ -519,6 +519,13 @@ def test_the_case_list_filters_like_the_api(api: ApiClient) -> None:
         r = api.client.get("/v1/reports", params=params, headers=api.headers("auditor"))
         assert r.status_code == 422
         assert Page(r.text).all("p", role="alert")
+    # digits of other scripts, and too many, are named in the page's words
+    for limit in ("²", "٢", "1" * 5000):
+        r = api.client.get("/v1/reports", params={"limit": limit}, headers=api.headers("auditor"))
+        assert r.status_code == 422
+        page = Page(r.text)
+        (alert,) = page.all("p", role="alert")
+        assert page.text(alert) == "Per page must be a whole number of at least 1.", limit
 
 
 # ---------------------------------------------------------------- drawings, limits
