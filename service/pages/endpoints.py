@@ -27,7 +27,14 @@ from sqlalchemy.exc import DBAPIError
 from sqlalchemy.exc import TimeoutError as PoolTimeoutError
 
 from models.impact_mode import ImpactMode
-from service.auth import Caller, Role, caller_for_key, caller_for_key_id
+from service.auth import (
+    Caller,
+    Role,
+    caller_for_key,
+    caller_for_key_id,
+    hash_key,
+    session_key_tag,
+)
 from service.cases import service as cases_service
 from service.context import ServiceContext
 from service.db.repository import CaseFilters
@@ -162,7 +169,7 @@ def _identify(request: Request, ctx: ServiceContext) -> tuple[Caller | None, Bro
     session = read_session(ctx.session_secret, request.cookies.get(SESSION_COOKIE), now=time.time())
     if session is None or session_has_ended(ctx.sessions, session):
         return None, None
-    caller = caller_for_key_id(ctx.sessions, session.key_id)
+    caller = caller_for_key_id(ctx.sessions, session.key_id, session.key_tag)
     return caller, session if caller is not None else None
 
 
@@ -347,7 +354,8 @@ async def login(request: Request, ctx: ContextDep) -> Response:
             next_url=next_url,
         )
     ttl = ctx.settings.session_ttl_s
-    value, _ = issue_session(ctx.session_secret, caller.key_id, now=time.time(), ttl_s=ttl)
+    tag = session_key_tag(hash_key(key))
+    value, _ = issue_session(ctx.session_secret, caller.key_id, tag, now=time.time(), ttl_s=ttl)
     response = RedirectResponse(_safe_next(request, next_url), status_code=303)
     response.headers.update(_SECURITY_HEADERS)
     set_session_cookie(response, value, max_age=ttl)
