@@ -53,6 +53,7 @@ from pydantic import ValidationError
 from models import limits, units
 from models.assumptions import Assumption, AssumptionCode
 from models.notification import AirbagState, Seat
+from service.cases import veds_xml
 from service.cases.notification import CrashNotificationIn, ReceivedSource
 from service.cases.veds_xml import J_NAMESPACE, NC_NAMESPACE, VEDS_NAMESPACES, _qualified, parse_xml
 from service.problems import FieldError, UnprocessableNotification
@@ -64,7 +65,6 @@ __all__ = [
     "clock_to_pdof_deg",
     "delta_v_to_kmh",
     "is_veds_media_type",
-    "is_xsd_decimal",
     "read_veds",
 ]
 
@@ -113,19 +113,6 @@ NOT_IN_VEDS: Final[tuple[tuple[str, AssumptionCode], ...]] = (
 )
 
 
-#: xsd:decimal's lexical form (no exponent, no underscores, no NaN), ASCII digits only
-#: (``\d`` would take any Unicode digit, ``٤٠`` or ``４０``). Any number of digits, leading
-#: zeros and decimals (an exact KPH twin of an MPH value has six more decimals than it),
-#: as XML Schema allows: the length is capped below, the value checked against the limits.
-_DECIMAL = re.compile(r"[+-]?([0-9]+(\.[0-9]*)?|\.[0-9]+)")
-#: Longest number text, characters. [R] Far beyond any sensor's precision (an MPH
-#: value with 12 decimals is 22 characters as KPH); bounds the decimal arithmetic.
-_MAX_DECIMAL_CHARS: Final = 64
-
-
-#: xsd:integer's lexical form, ASCII digits only (leading zeros allowed); the length is
-#: capped as a decimal's, the value checked where it is read.
-_INTEGER = re.compile(r"[+-]?[0-9]+")
 #: A model year (``nc:ItemModelYearDate``, an xs:gYear): four ASCII digits.
 _YEAR = re.compile(r"[0-9]{4}")
 #: The model years the notification takes (``vehicle.model_year``).
@@ -137,16 +124,6 @@ _EVENT_ID = re.compile(r"^[\x21-\x7e]{1,128}$")
 
 
 _BOOLEANS: Final = {"true": True, "1": True, "false": False, "0": False}
-
-
-def is_xsd_decimal(text: str) -> bool:
-    """An xsd:decimal in ASCII digits, no longer than the number length cap."""
-    return len(text) <= _MAX_DECIMAL_CHARS and _DECIMAL.fullmatch(text) is not None
-
-
-def _is_integer(text: str) -> bool:
-    """An xsd:integer in ASCII digits, no longer than the number length cap."""
-    return len(text) <= _MAX_DECIMAL_CHARS and _INTEGER.fullmatch(text) is not None
 
 
 def _said(flag: bool | None) -> str:
@@ -316,7 +293,7 @@ def _pulse(m: _Mapper, pulse: Element, path: str) -> _Pulse:
     measure = m.need(pulse, "veds:CrashPulseChangeInVelocityMeasure", path)
     value_text = m.need_text(measure, "nc:MeasurePointValue", measure_path)
     unit = m.need_text(measure, "nc:MeasureUnitText", measure_path)
-    if not is_xsd_decimal(value_text):
+    if not veds_xml.is_xsd_decimal(value_text):
         raise _refuse(
             f"{measure_path}/nc:MeasurePointValue",
             f"{value_text!r} is not a decimal number",
@@ -343,26 +320,25 @@ def _pulse(m: _Mapper, pulse: Element, path: str) -> _Pulse:
         )
     pdof_path = f"{path}/veds:CrashPulsePrincipalDirectionOfForceValue"
     clock = m.need_text(pulse, "veds:CrashPulsePrincipalDirectionOfForceValue", path)
-    if not _is_integer(clock) or not 1 <= int(clock) <= 12:
+    hour = veds_xml.xsd_integer(clock)
+    if hour is None or not 1 <= hour <= 12:
         raise _refuse(
             pdof_path, f"{clock!r} is not a clock direction 1-12 (12 frontal)", "veds_clock"
         )
     turns_text = m.text(pulse, "veds:CrashPulseRolloverQuarterTurnsValue", path, required=False)
-    turns = 0
-    if turns_text is not None:
-        if not _is_integer(turns_text) or int(turns_text) < 0:
-            raise _refuse(
-                f"{path}/veds:CrashPulseRolloverQuarterTurnsValue",
-                f"{turns_text!r} is not a non-negative integer",
-                "veds_number",
-            )
-        turns = int(turns_text)
+    turns = 0 if turns_text is None else veds_xml.xsd_integer(turns_text)
+    if turns is None or turns < 0:
+        raise _refuse(
+            f"{path}/veds:CrashPulseRolloverQuarterTurnsValue",
+            f"{turns_text!r} is not a non-negative integer",
+            "veds_number",
+        )
     return _Pulse(
         path=path,
         delta_v_kmh=delta_v_kmh,
-        pdof_deg=clock_to_pdof_deg(int(clock)),
+        pdof_deg=clock_to_pdof_deg(hour),
         quarter_turns=turns,
-        written=f"{value_text} {unit}, {int(clock)} o'clock",
+        written=f"{value_text} {unit}, {hour} o'clock",
     )
 
 
@@ -421,9 +397,7 @@ def _crash(
     turns = most_turns.quarter_turns
     turns_path = f"{most_turns.path}/veds:CrashPulseRolloverQuarterTurnsValue"
     if turns > 0:  # an error on the field names this element
-        m.map(
-            turns_path, "crash.rollover_quarter_turns", turns, "the most quarter turns of any pulse"
-        )
+        m.map(turns_path, "crash.rollover_quarter_turns", turns, "the most of any pulse")
     if rolled is False and turns > 0:  # the JSON rule: explicit false with turns is refused
         raise _refuse(
             turns_path,
@@ -674,18 +648,15 @@ def _event_id(m: _Mapper, crash: Element, crash_path: str, raw: bytes) -> str:
 
 
 def _model_year(m: _Mapper, vehicle: Element, vehicle_path: str) -> str | None:
-    """The model year as written, when it is one (four ASCII digits, 1950-2100).
-
-    Anything else is dropped with an assumption naming the element: a malformed year
-    must not cost the crash its triage, and is never handed on (NEMSIS eInjury.20).
-    """
+    """The model year as written when it is one, else None and an assumption naming the
+    element (a malformed year must not cost the crash its triage, nor reach NEMSIS)."""
     year = m.text(vehicle, "nc:ItemModelYearDate", vehicle_path, required=False)
     if year is None or (_YEAR.fullmatch(year) and MIN_MODEL_YEAR <= int(year) <= MAX_MODEL_YEAR):
         return year
     m.assume(
         AssumptionCode.VEDS_MODEL_YEAR_DROPPED,
-        f"{vehicle_path}/nc:ItemModelYearDate {year[:_MAX_DECIMAL_CHARS]!r} is not a model year "
-        f"(four ASCII digits, {MIN_MODEL_YEAR}-{MAX_MODEL_YEAR}): dropped",
+        f"{vehicle_path}/nc:ItemModelYearDate {year[: veds_xml.MAX_NUMBER_CHARS]!r} is not a "
+        f"model year (four ASCII digits, {MIN_MODEL_YEAR}-{MAX_MODEL_YEAR}): dropped",
         field="vehicle.model_year",
     )
     return None

@@ -15,8 +15,8 @@ from decimal import Decimal, InvalidOperation
 from typing import Final
 from xml.etree.ElementTree import Element
 
-from service.cases.veds import delta_v_to_kmh, is_xsd_decimal
-from service.cases.veds_xml import NC_NAMESPACE, VEDS_NAMESPACES, parse_xml
+from service.cases.veds import delta_v_to_kmh
+from service.cases.veds_xml import NC_NAMESPACE, VEDS_NAMESPACES, is_xsd_decimal, parse_xml
 from service.problems import DomainError
 
 __all__ = ["VedsFacts", "veds_facts"]
