@@ -50,6 +50,7 @@ class AssumptionCode(StrEnum):
     POINT_OUTSIDE_INTERVAL = "point_outside_interval"
     OCCUPANT_MODEL_AIS_CAPPED = "occupant_model_ais_capped"
     SIDE_BEYOND_TESTED_SEVERITY = "side_beyond_tested_severity"
+    PULSE_LOOKS_CORRUPT = "pulse_looks_corrupt"
     # what a VEDS document (RFC 8148) left open when it was mapped to a notification
     VEDS_CRASH_TIME_ASSUMED = "veds_crash_time_assumed"
     VEDS_MOST_SEVERE_PULSE = "veds_most_severe_pulse"
@@ -173,6 +174,13 @@ DESCRIPTIONS: Final[dict[AssumptionCode, str]] = {
         "side occupant models were checked against (IIHS side test, struck-car delta-V up to "
         "31 km/h): the models extrapolate the door intrusion and their head and chest loads are "
         "not bounded by any published test; read their measures as an upper bound."
+    ),
+    AssumptionCode.PULSE_LOOKS_CORRUPT: (
+        "The acceleration record as sent looks corrupt: its samples are not a vehicle's motion "
+        "(a sign change at nearly every sample, or far more energy above the CFC 60 band than "
+        "in it), so the probability computed from it cannot rule out a severe crash. Every "
+        "occupant is flagged for a trauma center (the conservative decision). Check the "
+        "sensor's data path."
     ),
     AssumptionCode.VEDS_CRASH_TIME_ASSUMED: (
         "VEDS: no incident time (veds:Crash/nc:ActivityDate): the document's received or post "

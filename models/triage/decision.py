@@ -3,6 +3,7 @@ models and the statistical baseline; the case-level decision is the worst occupa
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Mapping
 
 from models.baseline.logistic import BaselineFeatures
@@ -20,9 +21,11 @@ from models.triage.result import LPM_OUTCOME, TriageDecision
 __all__ = [
     "RECOMMENDATION_TRAUMA_CENTER",
     "RECOMMENDATION_NO_TRAUMA_INDICATION",
+    "RECOMMENDATION_RECORD_CORRUPT",
     "LPM_THRESHOLDS",
     "BASELINE_OUTCOME",
     "decide",
+    "flagged_for_corrupt_record",
 ]
 
 
@@ -38,6 +41,14 @@ RECOMMENDATION_TRAUMA_CENTER = (
 RECOMMENDATION_NO_TRAUMA_INDICATION = (
     "No telemetry indication of ISS 15 or more: destination by EMS field assessment "
     "under local protocol."
+)
+
+
+#: Words for a decision made conservatively because the crash pulse record looks
+#: corrupt (``models.pulse_plausibility.nonphysical_acceleration``).
+RECOMMENDATION_RECORD_CORRUPT = (
+    "Transport to a Level I trauma center: the crash pulse record looks corrupt, so the "
+    "telemetry cannot rule out severe injury (decided conservatively)."
 )
 
 
@@ -152,3 +163,11 @@ def _risk_decision(
 
 def _worst(decisions: list[TriageDecision]) -> TriageDecision:
     return max(decisions, key=lambda d: (d.iss15_plus, d.probability))
+
+
+def flagged_for_corrupt_record(decision: TriageDecision) -> TriageDecision:
+    """`decision` made conservatively: positive whatever its probability (kept as computed),
+    because the pulse it was computed from looks corrupt."""
+    return dataclasses.replace(
+        decision, iss15_plus=True, recommendation=RECOMMENDATION_RECORD_CORRUPT
+    )

@@ -209,7 +209,7 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         },
         "triage_code": {
             "version": "0.2.0",
-            "sha256": "176c3d0d4fbfb85c0a6921e78fbb9d57051f3f861c94c4ce93f1bc58bde1321f",
+            "sha256": "8ffe27e0fe65372c1e178f0e506a88dac41102d579b9f7d0f5bd339e181b8422",
         },
         "risk_calibration": {
             "version": "1",

@@ -52,7 +52,8 @@ class TriageOut(OutModel):
 
     iss15_plus: bool = Field(
         description="True: likely ISS >= 15, transport to a Level I trauma center "
-        "(`probability` >= `threshold`)."
+        "(`probability` >= `threshold`; or flagged whatever the probability when the crash "
+        "pulse record looks corrupt: `pulse_looks_corrupt`)."
     )
     probability: float = Field(
         ge=0,
