@@ -3,13 +3,18 @@
 from __future__ import annotations
 
 from alembic import context
-from sqlalchemy import Connection
+from sqlalchemy import Connection, text
 
 from service.db.session import make_engine, normalise_url
 from service.db.tables import Base
 
 config = context.config
 target_metadata = Base.metadata
+
+#: PostgreSQL advisory lock key held by a migration for its transaction, so that
+#: processes migrating at once (workers, or replicas whose store just returned) run
+#: one after the other: the later ones find the schema at head. Any fixed 64-bit value.
+MIGRATION_LOCK_KEY = 0x41AC_4E17
 
 
 def _url() -> str:
@@ -29,6 +34,10 @@ def _run(connection: Connection) -> None:
         render_as_batch=connection.dialect.name == "sqlite",
     )
     with context.begin_transaction():
+        if connection.dialect.name == "postgresql":
+            connection.execute(
+                text("SELECT pg_advisory_xact_lock(:key)"), {"key": MIGRATION_LOCK_KEY}
+            )
         context.run_migrations()
 
 

@@ -55,6 +55,7 @@ class AssumptionCode(StrEnum):
     POINT_OUTSIDE_INTERVAL = "point_outside_interval"
     OCCUPANT_MODEL_AIS_CAPPED = "occupant_model_ais_capped"
     SIDE_BEYOND_TESTED_SEVERITY = "side_beyond_tested_severity"
+    PULSE_LOOKS_CORRUPT = "pulse_looks_corrupt"
     # what a VEDS document (RFC 8148) left open when it was mapped to a notification
     VEDS_CRASH_TIME_ASSUMED = "veds_crash_time_assumed"
     VEDS_MOST_SEVERE_PULSE = "veds_most_severe_pulse"
@@ -64,6 +65,7 @@ class AssumptionCode(StrEnum):
     VEDS_FRONTAL_AIRBAG_NOT_REPORTED = "veds_frontal_airbag_not_reported"
     VEDS_VEHICLE_CLASS_ASSUMED = "veds_vehicle_class_assumed"
     VEDS_DRIVE_SIDE_ASSUMED = "veds_drive_side_assumed"
+    VEDS_MODEL_YEAR_DROPPED = "veds_model_year_dropped"
 
 
 #: What each code means and what an integrator may do about it.
@@ -207,6 +209,13 @@ DESCRIPTIONS: Final[dict[AssumptionCode, str]] = {
         "31 km/h): the models extrapolate the door intrusion and their head and chest loads are "
         "not bounded by any published test; read their measures as an upper bound."
     ),
+    AssumptionCode.PULSE_LOOKS_CORRUPT: (
+        "The acceleration record as sent looks corrupt: its samples are not a vehicle's motion "
+        "(a sign change at nearly every sample, or far more energy above the CFC 60 band than "
+        "in it), so the probability computed from it cannot rule out a severe crash. Every "
+        "occupant is flagged for a trauma center (the conservative decision). Check the "
+        "sensor's data path."
+    ),
     AssumptionCode.VEDS_CRASH_TIME_ASSUMED: (
         "VEDS: no incident time (veds:Crash/nc:ActivityDate): the document's received or post "
         "time, else the time the service received it, was taken as the crash time."
@@ -238,6 +247,11 @@ DESCRIPTIONS: Final[dict[AssumptionCode, str]] = {
     AssumptionCode.VEDS_DRIVE_SIDE_ASSUMED: (
         "VEDS: no drive side in the document: left-hand drive assumed (seat code 1, the "
         "driver, on the left)."
+    ),
+    AssumptionCode.VEDS_MODEL_YEAR_DROPPED: (
+        "VEDS: the model year (nc:ItemModelYearDate) is not four ASCII digits from 1950 to "
+        "2100: it was dropped, and the crash triaged without it (the field risk models then "
+        "take their median year: model_year_imputed)."
     ),
 }
 

@@ -42,7 +42,10 @@ Plausibility
 ------------
 A measured pulse that is not physical (a delta-V record implying more than the
 accepted acceleration, or a delta-V that swings back and forth beyond the noise)
-is refused, naming the field: :mod:`models.pulse_plausibility` holds the rule.
+is refused, naming the field: :mod:`models.pulse_plausibility` holds the rule. An
+acceleration record whose raw samples are not a vehicle's motion (a sign change at
+every sample, energy far above the CFC 60 band) is processed, and marked as looking
+corrupt (``ProcessedPulse.nonphysical``): the triage then decides conservatively.
 
 Processing per kind
 -------------------
@@ -90,6 +93,7 @@ from models.pulse_plausibility import (
     MAX_DELTA_V_REVERSALS,
     check_implied_acceleration,
     count_reversals,
+    nonphysical_acceleration,
     reversal_band_kmh,
 )
 from models.pulse_plausibility import warm_up as _warm_up_plausibility
@@ -236,6 +240,10 @@ class ProcessedPulse:
         Time from the start of the record to the end of event, ms.
     haversine : HaversineFit
         Haversine fitted to the resultant acceleration.
+    nonphysical : str or None
+        Why the measured record looks corrupt (its raw samples are not a vehicle's
+        motion: :func:`models.pulse_plausibility.nonphysical_acceleration`), naming
+        the field; None when it does not.
     """
 
     time_s: FloatArray = field(repr=False)
@@ -249,6 +257,7 @@ class ProcessedPulse:
     peak_accel_g: float
     duration_ms: float
     haversine: HaversineFit
+    nonphysical: str | None = None
 
     def _key(self) -> tuple[object, ...]:
         arrays = tuple(
@@ -264,6 +273,7 @@ class ProcessedPulse:
             self.peak_accel_g,
             self.duration_ms,
             self.haversine,
+            self.nonphysical,
         )
         return arrays + scalars
 
@@ -624,6 +634,7 @@ def _summarise(
     dvx_kmh: FloatArray,
     dvy_kmh: FloatArray,
     rate_hz: float,
+    nonphysical: str | None = None,
 ) -> ProcessedPulse:
     """Common tail for measured pulses: end of event, delta-V, PDOF, peak, fit."""
     if not (np.all(np.isfinite(dvx_kmh)) and np.all(np.isfinite(dvy_kmh))):
@@ -655,6 +666,7 @@ def _summarise(
         peak_accel_g=float(np.max(resultant)),
         duration_ms=float(t[end]) * 1e3,
         haversine=fit,
+        nonphysical=nonphysical,
     )
 
 
@@ -677,7 +689,10 @@ def _process_acceleration(pulse: AccelerationPulse, rate_hz: float) -> Processed
         )
     length = _check_record_duration("longitudinal_g", ax_raw.size, 1.0 / fs)
     # both channels through the filter side by side: cfc_filter's numbers, row by row
-    ax_f, ay_f = cfc_filter_rows(np.vstack((ax_raw, ay_raw)), fs, PULSE_CFC)
+    raw = np.vstack((ax_raw, ay_raw))
+    filtered = cfc_filter_rows(raw, fs, PULSE_CFC)
+    ax_f, ay_f = filtered
+    nonphysical = nonphysical_acceleration(raw, filtered, ("longitudinal_g", "lateral_g"), fs)
     t_in = np.arange(ax_raw.size, dtype=np.float64) / fs
     t = _grid(length, rate_hz)
     ax = np.interp(t, t_in, ax_f)
@@ -685,7 +700,7 @@ def _process_acceleration(pulse: AccelerationPulse, rate_hz: float) -> Processed
     to_kmh = STANDARD_GRAVITY * KMH_PER_MPS
     dvx = _cumulative_trapezoid(ax, 1.0 / rate_hz) * to_kmh
     dvy = _cumulative_trapezoid(ay, 1.0 / rate_hz) * to_kmh
-    return _summarise("longitudinal_g", t, ax, ay, dvx, dvy, rate_hz)
+    return _summarise("longitudinal_g", t, ax, ay, dvx, dvy, rate_hz, nonphysical)
 
 
 def _process_delta_v(pulse: DeltaVPulse, rate_hz: float) -> ProcessedPulse:

@@ -16,6 +16,14 @@ refused with a :class:`~models.pulse.PulseError` naming the field when either
 There is no "answer it anyway" branch: a record refused here is a 422, so the
 decision never reads a violent record as a minor crash. What remains (within
 the limits) is decided on the record's *maximum* delta-V (``models.pulse``).
+
+A measured acceleration record is also checked as it came in, before the CFC 60
+filter (:func:`nonphysical_acceleration`): the filter removes what lies above the
+crash-pulse band, so content that is not a vehicle's motion at all (a channel that
+changes sign at every sample, or energy far above the band) would otherwise leave
+only the filter's edge ringing, read as a minor crash. Such a record looks corrupt;
+it is not refused (it may be a real crash badly recorded) but decided conservatively
+(``models.triage``: every occupant flagged, ``pulse_looks_corrupt``).
 """
 
 from __future__ import annotations
@@ -33,8 +41,12 @@ __all__ = [
     "EDR_DELTA_V_ACCURACY",
     "EDR_DELTA_V_RESOLUTION_KMH",
     "MAX_DELTA_V_REVERSALS",
+    "MAX_OUT_OF_BAND_ENERGY_RATIO",
+    "MAX_SIGN_FLIP_SHARE",
+    "SIGN_FLIP_FLOOR_SHARE",
     "check_implied_acceleration",
     "count_reversals",
+    "nonphysical_acceleration",
     "reversal_band_kmh",
     "warm_up",
 ]
@@ -53,6 +65,25 @@ MAX_DELTA_V_REVERSALS: Final[int] = 3
 
 #: km/h per (m/s): exact.
 _KMH_PER_MPS: Final[float] = 3.6
+
+#: Most energy (sum of squared samples, both channels) the CFC 60 filter may remove
+#: from a measured acceleration record, as a multiple of the energy it keeps. [R] A
+#: vehicle accelerometer rings above the crash-pulse band (its structure's modes, the
+#: band of CFC 600), with energy of the order of the pulse's; 25 (an RMS 5 times the
+#: pulse's) is far beyond that, and far below a record of noise or of alternating
+#: samples (about 40 and 70 for 100 ms at 10 kHz).
+MAX_OUT_OF_BAND_ENERGY_RATIO: Final[float] = 25.0
+
+#: Most share of a channel's sample-to-sample steps that may change sign between two
+#: samples both beyond :data:`SIGN_FLIP_FLOOR_SHARE` of the channel's largest
+#: magnitude. [R] A sign change at every sample is content at the Nyquist frequency,
+#: which a data channel's anti-aliasing filter (SAE J211-1) removes; zero-mean white
+#: noise changes sign at about 3 steps in 10 by this count, a crash pulse far less.
+MAX_SIGN_FLIP_SHARE: Final[float] = 0.5
+
+#: Samples nearer zero than this share of the channel's largest magnitude do not count
+#: for :data:`MAX_SIGN_FLIP_SHARE` (the quiet parts of a record dither about zero). [R]
+SIGN_FLIP_FLOOR_SHARE: Final[float] = 0.1
 
 
 def reversal_band_kmh(max_delta_v_kmh: float) -> float:
@@ -161,6 +192,53 @@ def check_implied_acceleration(
     k = int(over[0])
     name = "longitudinal_kmh" if abs(dx[k]) >= abs(dy[k]) else "lateral_kmh"
     return name, k + 1, float(accel_g[k])
+
+
+def nonphysical_acceleration(
+    raw_g: FloatArray, filtered_g: FloatArray, names: tuple[str, str], rate_hz: float
+) -> str | None:
+    """Why a measured acceleration record looks corrupt, or None when it does not.
+
+    Parameters
+    ----------
+    raw_g : ndarray, shape (2, n)
+        The record's channels as sent, g.
+    filtered_g : ndarray, shape (2, n)
+        The same channels after the CFC 60 filter, g.
+    names : (str, str)
+        The channels' field names (``longitudinal_g``, ``lateral_g``).
+    rate_hz : float
+        Their sampling rate, Hz.
+
+    Returns
+    -------
+    str or None
+        The reason, naming the field: a channel changing sign at more than
+        :data:`MAX_SIGN_FLIP_SHARE` of its steps, or more than
+        :data:`MAX_OUT_OF_BAND_ENERGY_RATIO` times the energy above the band than in it.
+    """
+    raw = np.asarray(raw_g, dtype=np.float64)
+    for name, x in zip(names, raw, strict=True):
+        if x.size < 2:
+            continue
+        floor = SIGN_FLIP_FLOOR_SHARE * float(np.max(np.abs(x)))
+        beyond = np.abs(x) > floor
+        flips = int(np.count_nonzero((x[1:] * x[:-1] < 0.0) & beyond[1:] & beyond[:-1]))
+        share = flips / (x.size - 1)
+        if share > MAX_SIGN_FLIP_SHARE:
+            return (
+                f"`{name}` changes sign at {share:.0%} of its samples (at {rate_hz:g} Hz): "
+                "a vehicle's motion does not"
+            )
+    kept = float(np.sum(np.square(filtered_g)))
+    removed = float(np.sum(np.square(raw - filtered_g)))
+    if removed > MAX_OUT_OF_BAND_ENERGY_RATIO * kept:
+        ratio = "without bound" if kept == 0.0 else f"{removed / kept:.3g} times"
+        return (
+            f"`{names[0]}`/`{names[1]}` hold {ratio} more energy above the CFC 60 band than "
+            "in it: not a crash pulse"
+        )
+    return None
 
 
 def warm_up() -> None:

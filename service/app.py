@@ -59,8 +59,10 @@ def create_app(settings: Settings | None = None) -> FastAPI:
 
     The lifespan migrates the database (when `auto_migrate`), loads and verifies
     the models, and warms the engine. A model that fails to load leaves the
-    service alive but not ready (/readyz says why); a high-risk threshold below an
-    operating threshold in use stops the start (ThresholdOrderError).
+    service alive but not ready (/readyz says why); so does a store that cannot be
+    reached at start, whose migration then runs once it returns (``migrate.MigrationRetry``);
+    a high-risk threshold below an operating threshold in use stops the start
+    (ThresholdOrderError).
     """
     settings = settings or get_settings()
     metrics = Metrics()
@@ -70,8 +72,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     @asynccontextmanager
     async def lifespan(app: FastAPI) -> AsyncIterator[dict[str, Any]]:
         db_engine = make_engine(settings.database_url)
-        if settings.auto_migrate:
-            migrate.upgrade(settings.database_url)
+        migrated = not settings.auto_migrate or migrate.upgrade_or_wait(settings.database_url)
         models = None
         error = None
         try:
@@ -108,6 +109,9 @@ def create_app(settings: Settings | None = None) -> FastAPI:
             ctx.key_states, ctx.sessions, caller_of_row, settings.key_refresh_interval_s
         )
         keys.start()
+        if not migrated:  # the store was unreachable: migrate once it returns
+            ctx.migration = migrate.MigrationRetry(settings.database_url, on_done=keys.refresh)
+            ctx.migration.start()
         if loads is not None:
             loads.claim()  # counted among the workers once it serves
         try:
@@ -117,6 +121,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
                 loads.close()
             replayer.stop()
             keys.stop()
+            if ctx.migration is not None:
+                ctx.migration.stop()
             db_engine.dispose()
 
     app = FastAPI(

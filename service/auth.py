@@ -41,6 +41,7 @@ __all__ = [
     "caller_for_key_id",
     "create_api_key",
     "hash_key",
+    "session_key_tag",
     "require_auditor",
     "metrics_access",
     "require_submitter",
@@ -77,6 +78,15 @@ def hash_key(key: str) -> str:
     return hashlib.sha256(key.encode("utf-8")).hexdigest()
 
 
+def session_key_tag(key_sha256: str) -> str:
+    """The fingerprint of a key's secret that its browser sessions carry.
+
+    Derived from the stored digest (never the digest itself): rotating the key gives it
+    a new digest, so every session signed in with the old secret stops matching it.
+    """
+    return hashlib.sha256(f"session-key\x00{key_sha256}".encode()).hexdigest()[:32]
+
+
 def create_api_key(sessions: sessionmaker[Session], *, name: str, role: Role) -> tuple[ApiKey, str]:
     """Create and store a key; returns the row and the secret (shown once, never stored)."""
     secret, prefix, digest = _new_secret()
@@ -105,11 +115,14 @@ def caller_for_key(sessions: sessionmaker[Session], key: str) -> Caller | None:
     return None if row is None else Caller(key_id=row.id, name=row.name, role=Role(row.role))
 
 
-def caller_for_key_id(sessions: sessionmaker[Session], key_id: int) -> Caller | None:
-    """The caller of an active API key by its id (browser sessions), or None."""
+def caller_for_key_id(sessions: sessionmaker[Session], key_id: int, key_tag: str) -> Caller | None:
+    """The caller of a browser session: its key by id, active and still holding the secret
+    the session was signed in with (`session_key_tag`); else None (revoked or rotated)."""
     with sessions() as session:
         row = repository.get_active_key_by_id(session, key_id)
-    return None if row is None else Caller(key_id=row.id, name=row.name, role=Role(row.role))
+    if row is None or not secrets.compare_digest(session_key_tag(row.key_sha256), key_tag):
+        return None
+    return Caller(key_id=row.id, name=row.name, role=Role(row.role))
 
 
 def _new_secret() -> tuple[str, str, str]:
@@ -136,7 +149,8 @@ def revoke_api_key(sessions: sessionmaker[Session], name_or_id: str) -> ApiKey:
 
 
 def rotate_api_key(sessions: sessionmaker[Session], name_or_id: str) -> tuple[ApiKey, str]:
-    """Give a key a new secret (same name, role and cases); the old one stops at once.
+    """Give a key a new secret (same name, role and cases); the old one stops at once, and
+    so do the browser sessions signed in with it (`session_key_tag`).
 
     Raises
     ------

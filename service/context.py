@@ -13,6 +13,7 @@ from sqlalchemy.orm import Session, sessionmaker
 from models.field.model import WITHDRAWN_VERSIONS
 from models.tiers import check_threshold_order
 from models.triage import EngineModels, load_engine_models, operating_thresholds
+from service.db.migrate import MigrationRetry
 from service.db.spool import Spool
 from service.key_cache import KeyStates
 from service.metrics import Metrics
@@ -131,6 +132,8 @@ class ServiceContext:
     #: What this process knows of the API keys (``service.key_cache``). Used only
     #: while the store cannot be read, so that spooling works through an outage.
     key_states: KeyStates = field(default_factory=KeyStates)
+    #: The migration waiting for the store, when it could not be reached at start.
+    migration: MigrationRetry | None = None
     _last_reset: float = 0.0
     _reset_lock: threading.Lock = field(default_factory=threading.Lock)
 

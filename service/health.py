@@ -55,7 +55,10 @@ def readyz(ctx: ContextDep) -> JSONResponse:
     The store must take a committed write (a read-only or full database is not
     ready, though it answers ``SELECT 1``). While it cannot, the service still
     records cases in its spool: `degraded`, 200 unless `ready_while_spooling` is
-    off. Details name error types only, never hosts.
+    off, and unless this process has never read the key table (it started during
+    the outage): it can verify no API key, so it answers 503 and a balancer routes
+    around it. 503 too while the migration waits for the store. Details name error
+    types only, never hosts.
     """
     reasons: list[str] = []
     store_error = _store_writable(ctx)
@@ -68,6 +71,13 @@ def readyz(ctx: ContextDep) -> JSONResponse:
         spool_error = _error_kind(exc.__cause__ or exc)
     if ctx.models is None:
         reasons.append(f"models not loaded: {ctx.models_error or 'unknown reason'}")
+    if ctx.migration is not None and not ctx.migration.done.is_set():
+        reasons.append("the store was unreachable at start: its migration runs once it returns")
+    if store_error is not None and not ctx.key_states.loaded:
+        reasons.append(
+            f"store not readable ({store_error}) and the key table never read since start: "
+            "no API key can be verified"
+        )
     if store_error is not None:
         if spool_error is not None:
             reasons.append(f"store not writable ({store_error}) and spool failing ({spool_error})")

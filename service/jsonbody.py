@@ -10,9 +10,16 @@ keys, and refused as malformed (400) before pydantic sees it.
 from __future__ import annotations
 
 import json
-from typing import Any
+import sys
+from typing import Any, Final
 
-__all__ = ["MalformedJson", "loads_strict"]
+__all__ = ["MAX_INTEGER_DIGITS", "MalformedJson", "loads_strict"]
+
+#: Most digits of an integer in a JSON document: Python's own bound on turning a
+#: digit string into an int (``sys.int_info.default_max_str_digits``, 4300), far
+#: beyond any field's range. A longer one is refused in the service's words, not
+#: the interpreter's (which name ``sys.set_int_max_str_digits``).
+MAX_INTEGER_DIGITS: Final[int] = sys.int_info.default_max_str_digits
 
 
 class MalformedJson(ValueError):
@@ -28,6 +35,16 @@ def _unique_keys(pairs: list[tuple[str, Any]]) -> dict[str, Any]:
     return out
 
 
+def _bounded_int(text: str) -> int:
+    """An integer of the document; too many digits is malformed (400), not a crash."""
+    digits = len(text) - text.startswith("-")
+    if digits > MAX_INTEGER_DIGITS:
+        raise MalformedJson(
+            f"a number is too long: an integer of {digits} digits (at most {MAX_INTEGER_DIGITS})"
+        )
+    return int(text)
+
+
 def loads_strict(raw: bytes | str) -> Any:
     """Parse one JSON document, refusing duplicate keys and excessive nesting.
 
@@ -37,11 +54,12 @@ def loads_strict(raw: bytes | str) -> Any:
     Raises
     ------
     MalformedJson
-        On invalid JSON, invalid UTF-8, a duplicate key, or nesting deep enough to
-        exhaust the parser's recursion limit.
+        On invalid JSON, invalid UTF-8, a duplicate key, an integer of more than
+        :data:`MAX_INTEGER_DIGITS` digits, or nesting deep enough to exhaust the
+        parser's recursion limit.
     """
     try:
-        return json.loads(raw, object_pairs_hook=_unique_keys)
+        return json.loads(raw, object_pairs_hook=_unique_keys, parse_int=_bounded_int)
     except MalformedJson:
         raise
     except RecursionError as exc:

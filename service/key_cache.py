@@ -16,6 +16,11 @@ known active within :data:`KEY_CACHE_MAX_AGE_S` is accepted; any other key (neve
 seen, rotated away, or known only from too long ago) is unknown: 503, retry later.
 A revocation made less than one refresh interval before the outage, or during it,
 is enforced once the store returns.
+
+A process that has never read the key table (it started during an outage) knows no
+key: every request would be 503, so ``/readyz`` answers 503 until it has read it
+(:attr:`KeyStates.loaded`) and a balancer routes around the process. No snapshot is
+kept on disk: one could not honour a revocation made while this process was down.
 """
 
 from __future__ import annotations
@@ -70,6 +75,12 @@ class KeyStates:
     def __init__(self) -> None:
         self._states: dict[str, KeyState] = {}
         self._lock = threading.Lock()
+        self._loaded = False
+
+    @property
+    def loaded(self) -> bool:
+        """Whether the key table was read at least once (a snapshot was taken)."""
+        return self._loaded
 
     def seen_active(self, digest: str, caller: object) -> None:
         """A request read this key from the store: active."""
@@ -96,6 +107,7 @@ class KeyStates:
                 if old.known_at > taken_at:
                     states[digest] = old
             self._states = states
+            self._loaded = True
 
     def verdict(self, digest: str) -> tuple[Verdict, object | None]:
         """The outage rule (module docstring) for one key hash, and its caller if active."""

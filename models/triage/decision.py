@@ -15,16 +15,33 @@ from models.notification import (
     Occupant,
 )
 from models.pulse import ProcessedPulse
-from models.tiers import recommendation, second_opinion_recommendation, tier_of
+from models.tiers import (
+    RECOMMENDATIONS,
+    Tier,
+    recommendation,
+    second_opinion_recommendation,
+    tier_of,
+)
 from models.triage.loading import EngineModels
 from models.triage.result import LPM_OUTCOME, TriageDecision
 
 __all__ = [
     "LPM_THRESHOLDS",
     "BASELINE_OUTCOME",
+    "RECOMMENDATION_RECORD_CORRUPT",
     "decide",
     "decide_tiered",
+    "flagged_for_corrupt_record",
 ]
+
+
+#: Words for a decision made conservatively because the crash pulse record looks
+#: corrupt (``models.pulse_plausibility.nonphysical_acceleration``): at least the
+#: moderate tier's words.
+RECOMMENDATION_RECORD_CORRUPT = (
+    "The crash pulse record looks corrupt, so the telemetry cannot rule out severe injury "
+    "(decided conservatively, at least moderate risk): " + RECOMMENDATIONS[Tier.MODERATE]
+)
 
 
 #: Decision thresholds on the occupant models' P(ISS >= 15), per mode. Bahouth,
@@ -179,3 +196,17 @@ def _risk_decision(
 
 def _worst(decisions: list[TriageDecision]) -> TriageDecision:
     return max(decisions, key=lambda d: (d.iss15_plus, d.probability))
+
+
+def flagged_for_corrupt_record(decision: TriageDecision) -> TriageDecision:
+    """`decision` made conservatively: positive and at least the moderate tier whatever
+    its probability (kept as computed), because the pulse it was computed from looks
+    corrupt; a high tier keeps its own words."""
+    if decision.tier is Tier.HIGH:
+        return dataclasses.replace(decision, iss15_plus=True)
+    return dataclasses.replace(
+        decision,
+        iss15_plus=True,
+        tier=Tier.MODERATE if decision.tier is not None else None,
+        recommendation=RECOMMENDATION_RECORD_CORRUPT,
+    )

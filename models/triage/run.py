@@ -15,7 +15,13 @@ from models.notification import (
 )
 from models.pulse import process_pulse
 from models.tiers import tier_of
-from models.triage.decision import _field_decision, _risk_decision, _risk_threshold, _worst
+from models.triage.decision import (
+    _field_decision,
+    _risk_decision,
+    _risk_threshold,
+    _worst,
+    flagged_for_corrupt_record,
+)
 from models.triage.field_evidence import (
     OccupantEvidence,
     _field_assumptions,
@@ -135,6 +141,14 @@ def triage(notification: CrashNotification, models: EngineModels) -> TriageResul
                 "in its data); the occupant models see only the planar crash pulse",
             )
         )
+    if pulse.nonphysical is not None:
+        assumptions.append(
+            Assumption(
+                AssumptionCode.PULSE_LOOKS_CORRUPT,
+                f"the crash pulse record looks corrupt ({pulse.nonphysical}): every occupant "
+                "is flagged for a trauma center, whatever the probability computed from it",
+            )
+        )
     if notification.multiple_impacts:
         assumptions.append(
             Assumption(
@@ -174,6 +188,10 @@ def triage(notification: CrashNotification, models: EngineModels) -> TriageResul
             answered = _occupant_triage(occupant, evidence, decision, prediction.mode)
             assumptions.extend(_field_assumptions(i, occupant, prediction, field_model))
         field_ms += 1000.0 * (time.perf_counter() - tf)
+        if pulse.nonphysical is not None:  # decided conservatively (models.pulse_plausibility)
+            answered = dataclasses.replace(
+                answered, triage=flagged_for_corrupt_record(answered.triage)
+            )
         occupants.append(answered)
     vehicle = (
         _vehicle_answer(field_model, models, risk_predictions)

@@ -25,6 +25,7 @@ from pydantic import (
     ValidationError,
     model_validator,
 )
+from pydantic_core import InitErrorDetails, PydanticCustomError
 
 from models import limits
 from models import notification as engine
@@ -74,7 +75,7 @@ MAX_CLOCK_SKEW = timedelta(minutes=10)
 #: An RFC 3339 date-time with its offset ("2026-11-23T08:15:30Z"). pydantic alone
 #: takes a bare number, or a string of digits, as a Unix time (fuzzing findings:
 #: ``occurred_at: 0`` or ``"1"``; ``received_from=0.5`` listed every case).
-_RFC3339 = re.compile(r"^\d{4}-\d{2}-\d{2}[Tt ]\d{2}:\d{2}")
+_RFC3339 = re.compile(r"^[0-9]{4}-[0-9]{2}-[0-9]{2}[Tt ][0-9]{2}:[0-9]{2}")
 
 
 _LAX_AWARE = TypeAdapter(AwareDatetime)
@@ -360,15 +361,53 @@ class CrashIn(WireModel):
         "`impact_count_imputed`).",
         examples=[2],
     )
-    rollover: bool = Field(default=False, description="The vehicle rolled over.")
+    rollover: bool = Field(
+        default=False,
+        description="The vehicle rolled over. Implied by `rollover_quarter_turns` above 0 when "
+        "left out; `false` with quarter turns above 0 is refused.",
+    )
     rollover_quarter_turns: int | None = Field(
         default=None,
         ge=0,
         le=40,
         description="Quarter turns of the rollover where the vehicle senses them (used by the "
-        "field risk models). Omitted with `rollover`: their median (reported).",
+        "field risk models). Above 0 they are a rollover (`rollover` true, or left out). "
+        "Omitted with `rollover`: their median (reported).",
         examples=[2],
     )
+
+    @model_validator(mode="before")
+    @classmethod
+    def _quarter_turns_imply_rollover(cls, data: Any) -> Any:
+        """Quarter turns above 0 with `rollover` left out say the vehicle rolled over
+        (a quarter turn is a rollover, as a VEDS document's turns are)."""
+        if isinstance(data, dict) and "rollover" not in data:
+            turns = data.get("rollover_quarter_turns")
+            if isinstance(turns, int) and not isinstance(turns, bool) and turns > 0:
+                return {**data, "rollover": True}
+        return data
+
+    @model_validator(mode="after")
+    def _rollover_agrees(self) -> CrashIn:
+        """Quarter turns above 0 with an explicit `rollover` false: refused, naming them."""
+        turns = self.rollover_quarter_turns
+        if turns and not self.rollover:
+            raise ValidationError.from_exception_data(
+                type(self).__name__,
+                [
+                    InitErrorDetails(
+                        type=PydanticCustomError(
+                            "value_error",
+                            "{turns} quarter turns contradict rollover false (a quarter turn "
+                            "is a rollover): send rollover true, or leave it out",
+                            {"turns": turns},
+                        ),
+                        loc=("rollover_quarter_turns",),
+                        input=turns,
+                    )
+                ],
+            )
+        return self
 
     @model_validator(mode="after")
     def _impacts_agree(self) -> CrashIn:

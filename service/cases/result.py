@@ -75,7 +75,9 @@ class TriageOut(OutModel):
 
     iss15_plus: bool = Field(
         description="True: `probability` >= `threshold`, a telemetry indication of ISS 15+ "
-        "(`tier` `moderate` or `high`; `tier` says which center)."
+        "(`tier` `moderate` or `high`; `tier` says which center); or flagged whatever the "
+        "probability when the crash pulse record looks corrupt (`pulse_looks_corrupt`, at "
+        "least the moderate tier)."
     )
     probability: float = Field(
         ge=0,

@@ -53,6 +53,7 @@ from pydantic import ValidationError
 from models import limits, units
 from models.assumptions import Assumption, AssumptionCode
 from models.notification import AirbagState, Seat
+from service.cases import veds_xml
 from service.cases.notification import CrashNotificationIn, ReceivedSource
 from service.cases.veds_xml import J_NAMESPACE, NC_NAMESPACE, VEDS_NAMESPACES, _qualified, parse_xml
 from service.problems import FieldError, UnprocessableNotification
@@ -112,18 +113,11 @@ NOT_IN_VEDS: Final[tuple[tuple[str, AssumptionCode], ...]] = (
 )
 
 
-#: xsd:decimal's lexical form (no exponent, no underscores, no NaN), ASCII digits only
-#: (``\d`` would take any Unicode digit, ``٤٠`` or ``４０``). Any number of decimals: an
-#: exact KPH twin of an MPH value has six more than it; the length is capped below.
-_DECIMAL = re.compile(r"^[+-]?([0-9]{1,12}(\.[0-9]*)?|\.[0-9]+)$")
-#: Longest number text, characters. [R] Far beyond any sensor's precision (an MPH
-#: value with 12 decimals is 22 characters as KPH); bounds the decimal arithmetic.
-_MAX_DECIMAL_CHARS: Final = 64
-
-
-_SMALL_INT = re.compile(r"^\+?[0-9]{1,3}$")
 #: A model year (``nc:ItemModelYearDate``, an xs:gYear): four ASCII digits.
-_YEAR = re.compile(r"^[0-9]{4}$")
+_YEAR = re.compile(r"[0-9]{4}")
+#: The model years the notification takes (``vehicle.model_year``).
+MIN_MODEL_YEAR: Final = 1950
+MAX_MODEL_YEAR: Final = 2100
 
 
 _EVENT_ID = re.compile(r"^[\x21-\x7e]{1,128}$")
@@ -299,7 +293,7 @@ def _pulse(m: _Mapper, pulse: Element, path: str) -> _Pulse:
     measure = m.need(pulse, "veds:CrashPulseChangeInVelocityMeasure", path)
     value_text = m.need_text(measure, "nc:MeasurePointValue", measure_path)
     unit = m.need_text(measure, "nc:MeasureUnitText", measure_path)
-    if len(value_text) > _MAX_DECIMAL_CHARS or not _DECIMAL.match(value_text):
+    if not veds_xml.is_xsd_decimal(value_text):
         raise _refuse(
             f"{measure_path}/nc:MeasurePointValue",
             f"{value_text!r} is not a decimal number",
@@ -326,26 +320,25 @@ def _pulse(m: _Mapper, pulse: Element, path: str) -> _Pulse:
         )
     pdof_path = f"{path}/veds:CrashPulsePrincipalDirectionOfForceValue"
     clock = m.need_text(pulse, "veds:CrashPulsePrincipalDirectionOfForceValue", path)
-    if not _SMALL_INT.match(clock) or not 1 <= int(clock) <= 12:
+    hour = veds_xml.xsd_integer(clock)
+    if hour is None or not 1 <= hour <= 12:
         raise _refuse(
             pdof_path, f"{clock!r} is not a clock direction 1-12 (12 frontal)", "veds_clock"
         )
     turns_text = m.text(pulse, "veds:CrashPulseRolloverQuarterTurnsValue", path, required=False)
-    turns = 0
-    if turns_text is not None:
-        if not _SMALL_INT.match(turns_text):
-            raise _refuse(
-                f"{path}/veds:CrashPulseRolloverQuarterTurnsValue",
-                f"{turns_text!r} is not a non-negative integer below 1000",
-                "veds_number",
-            )
-        turns = int(turns_text)
+    turns = 0 if turns_text is None else veds_xml.xsd_integer(turns_text)
+    if turns is None or turns < 0:
+        raise _refuse(
+            f"{path}/veds:CrashPulseRolloverQuarterTurnsValue",
+            f"{turns_text!r} is not a non-negative integer",
+            "veds_number",
+        )
     return _Pulse(
         path=path,
         delta_v_kmh=delta_v_kmh,
-        pdof_deg=clock_to_pdof_deg(int(clock)),
+        pdof_deg=clock_to_pdof_deg(hour),
         quarter_turns=turns,
-        written=f"{value_text} {unit}, {int(clock)} o'clock",
+        written=f"{value_text} {unit}, {hour} o'clock",
     )
 
 
@@ -400,7 +393,18 @@ def _crash(
             f"{len(read)} pulses",
         )
     rolled = m.boolean(vehicle, "veds:VehicleRolloverIndicator", vehicle_path, required=False)
-    turns = max(p.quarter_turns for p in read)
+    most_turns = max(read, key=lambda p: p.quarter_turns)  # the first of equals
+    turns = most_turns.quarter_turns
+    turns_path = f"{most_turns.path}/veds:CrashPulseRolloverQuarterTurnsValue"
+    if turns > 0:  # an error on the field names this element
+        m.map(turns_path, "crash.rollover_quarter_turns", turns, "the most of any pulse")
+    if rolled is False and turns > 0:  # the JSON rule: explicit false with turns is refused
+        raise _refuse(
+            turns_path,
+            f"{turns} quarter turns contradict veds:VehicleRolloverIndicator false (a quarter "
+            "turn is a rollover)",
+            "veds_rollover_contradiction",
+        )
     rollover = bool(rolled) or turns > 0
     m.map(
         f"{vehicle_path}/veds:VehicleRolloverIndicator"
@@ -646,11 +650,26 @@ def _event_id(m: _Mapper, crash: Element, crash_path: str, raw: bytes) -> str:
     return digest
 
 
+def _model_year(m: _Mapper, vehicle: Element, vehicle_path: str) -> str | None:
+    """The model year as written when it is one, else None and an assumption naming the
+    element (a malformed year must not cost the crash its triage, nor reach NEMSIS)."""
+    year = m.text(vehicle, "nc:ItemModelYearDate", vehicle_path, required=False)
+    if year is None or (_YEAR.fullmatch(year) and MIN_MODEL_YEAR <= int(year) <= MAX_MODEL_YEAR):
+        return year
+    m.assume(
+        AssumptionCode.VEDS_MODEL_YEAR_DROPPED,
+        f"{vehicle_path}/nc:ItemModelYearDate {year[: veds_xml.MAX_NUMBER_CHARS]!r} is not a "
+        f"model year (four ASCII digits, {MIN_MODEL_YEAR}-{MAX_MODEL_YEAR}): dropped",
+        field="vehicle.model_year",
+    )
+    return None
+
+
 def _vehicle_facts(m: _Mapper, vehicle: Element, vehicle_path: str) -> dict[str, str | None]:
     facts = {
         "make": m.text(vehicle, "nc:ItemMakeName", vehicle_path, required=False),
         "model": m.text(vehicle, "nc:ItemModelName", vehicle_path, required=False),
-        "model_year": m.text(vehicle, "nc:ItemModelYearDate", vehicle_path, required=False),
+        "model_year": _model_year(m, vehicle, vehicle_path),
         "body_category_code": m.text(
             vehicle, "j:VehicleBodyCategoryCode", vehicle_path, required=False
         ),
@@ -744,10 +763,10 @@ def read_veds(raw: bytes, *, received_at: datetime) -> VedsNotification:
         "crash": crash_doc,
         "occupants": occupants,
     }
-    year = vehicle_facts["model_year"]
-    if year is not None and _YEAR.match(year.strip()) and 1950 <= int(year.strip()) <= 2100:
-        document["vehicle"] = {"model_year": int(year.strip())}
-        m.map(f"{vehicle_path}/nc:ItemModelYearDate", "vehicle.model_year", int(year.strip()))
+    year = vehicle_facts["model_year"]  # a model year, or None (_model_year)
+    if year is not None:
+        document["vehicle"] = {"model_year": int(year)}
+        m.map(f"{vehicle_path}/nc:ItemModelYearDate", "vehicle.model_year", int(year))
     try:
         notification = CrashNotificationIn.model_validate_json(json.dumps(document), strict=True)
     except ValidationError as exc:

@@ -1,4 +1,5 @@
-"""The safe XML reader of VEDS documents: one UTF-8, well-formed, bounded XML tree.
+"""The safe XML reader of VEDS documents: one UTF-8, well-formed, bounded XML tree,
+and the XML Schema lexical forms of its numbers (:func:`is_xsd_decimal`, :func:`xsd_integer`).
 
 Reading is hardened (``defusedxml`` over the standard library's expat): a
 document type declaration is refused outright, so there are no entities,
@@ -20,7 +21,15 @@ from defusedxml.ElementTree import iterparse
 
 from service.problems import FieldError, MalformedXml
 
-__all__ = ["MAX_DEPTH", "MAX_ELEMENTS", "VEDS_NAMESPACES", "parse_xml"]
+__all__ = [
+    "MAX_DEPTH",
+    "MAX_ELEMENTS",
+    "MAX_NUMBER_CHARS",
+    "VEDS_NAMESPACES",
+    "is_xsd_decimal",
+    "parse_xml",
+    "xsd_integer",
+]
 
 
 #: VEDS namespaces read, with the version they stand for.
@@ -46,6 +55,35 @@ MAX_DEPTH: Final = 32
 #: Most elements accepted. [R] The full VEDS 3.1 example has about 130; 5,000 is
 #: room for many seats, airbags and pulses, and bounds the work on a crafted body.
 MAX_ELEMENTS: Final = 5_000
+
+
+#: Longest number text, characters. [R] Far beyond any sensor's precision (an MPH
+#: value with 12 decimals is 22 characters as KPH); bounds the decimal arithmetic.
+MAX_NUMBER_CHARS: Final = 64
+
+
+#: xsd:decimal's lexical form (no exponent, no underscores, no NaN), ASCII digits only
+#: (``\d`` would take any Unicode digit, ``٤٠`` or ``４０``). Any number of digits, leading
+#: zeros and decimals (an exact KPH twin of an MPH value has six more decimals than it),
+#: as XML Schema allows: the length is capped, the value checked against the limits.
+_DECIMAL = re.compile(r"[+-]?([0-9]+(\.[0-9]*)?|\.[0-9]+)")
+
+
+#: xsd:integer's lexical form, ASCII digits only (leading zeros allowed).
+_INTEGER = re.compile(r"[+-]?[0-9]+")
+
+
+def is_xsd_decimal(text: str) -> bool:
+    """An xsd:decimal in ASCII digits, no longer than :data:`MAX_NUMBER_CHARS`."""
+    return len(text) <= MAX_NUMBER_CHARS and _DECIMAL.fullmatch(text) is not None
+
+
+def xsd_integer(text: str) -> int | None:
+    """The value of an xsd:integer in ASCII digits no longer than :data:`MAX_NUMBER_CHARS`,
+    else None."""
+    if len(text) > MAX_NUMBER_CHARS or _INTEGER.fullmatch(text) is None:
+        return None
+    return int(text)
 
 
 _PREFIX_OF: Final = {NC_NAMESPACE: "nc", J_NAMESPACE: "j", **dict.fromkeys(VEDS_NAMESPACES, "veds")}

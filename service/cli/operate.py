@@ -21,7 +21,9 @@ __all__ = ["cmd_serve", "cmd_db", "cmd_keys", "cmd_cases", "cmd_triage"]
 def cmd_serve(args: argparse.Namespace) -> int:
     """Serve HTTP with N worker processes (uvicorn's supervisor), each warmed before it
     accepts connections; SIGTERM lets in-flight requests finish, then exits. With more
-    than one worker they share a table of requests in flight (`service.balance`)."""
+    than one worker they share a table of requests in flight (`service.balance`). A
+    store that cannot be reached does not stop the start: each worker says so once and
+    migrates when it returns (`service.db.migrate.upgrade_or_wait`)."""
     from service.logs import configure_logging
 
     settings = load_settings()
@@ -37,10 +39,15 @@ def cmd_serve(args: argparse.Namespace) -> int:
         except ValueError as exc:
             echo(f"error: {exc}", err=True)
             return 2
-    if settings.auto_migrate:  # once, before the workers start
+    if settings.auto_migrate and workers > 1:  # once, before the workers start
+        from sqlalchemy.exc import OperationalError
+
         from service.db import migrate
 
-        migrate.upgrade(settings.database_url)
+        try:
+            migrate.upgrade(settings.database_url)
+        except OperationalError:  # unreachable: each worker says so and migrates on its return
+            pass
     loads_dir = None
     if workers > 1:
         # compile the kernels into the shared numba cache once, so that every worker

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from datetime import datetime
@@ -87,9 +88,9 @@ def list_api_keys(session: Session) -> Sequence[ApiKey]:
 
 
 def get_api_key(session: Session, name_or_id: str) -> ApiKey | None:
-    """A key by its name, or by its numeric id."""
+    """A key by its name, or by its numeric id (ASCII digits: ``str.isdigit`` takes ``²``)."""
     key = get_api_key_by_name(session, name_or_id)
-    if key is None and name_or_id.isdigit():
+    if key is None and re.fullmatch(r"[0-9]{1,9}", name_or_id):
         key = session.get(ApiKey, int(name_or_id))
     return key
 

@@ -54,9 +54,10 @@ def _iter_texts(path: Path) -> Iterator[str]:
             for value in batch.column(0).to_pylist():
                 yield "" if value is None else str(value)
         return
-    with path.open(encoding="utf-8", newline=None) as fh:
+    # binary lines end at b"\n" only: a bare CR is JSON whitespace, not a line end
+    with path.open("rb") as fh:
         for raw in fh:
-            yield raw.rstrip("\n")
+            yield raw.decode("utf-8").removesuffix("\n").removesuffix("\r")
 
 
 def count_items(path: Path) -> int:
@@ -69,8 +70,9 @@ def count_items(path: Path) -> int:
 def read_texts(path: Path) -> list[str]:
     """Every notification text of `path` (the local pool holds its input whole).
 
-    Lines end at ``\n``, ``\r\n`` or ``\r`` only (not at the other separators of
-    `str.splitlines`, such as U+2028, which JSON allows inside a string)."""
+    Lines end at ``\n`` (or ``\r\n``) only: not at a bare ``\r``, which JSON takes as
+    whitespace between tokens, nor at the other separators of `str.splitlines`, such
+    as U+2028, which JSON allows inside a string."""
     return list(_iter_texts(path))
 
 

@@ -80,7 +80,8 @@ def _caller(
     """An API key's caller, or the signed-in case pages' (their session cookie).
 
     The cookie is taken as the pages take it: signed, not expired, not signed out
-    (``service.pages.session_end``), its key active; else the Bearer key is asked for.
+    (``service.pages.session_end``), its key active and not rotated since; else the
+    Bearer key is asked for.
     """
     if credentials is None and SESSION_COOKIE in request.cookies:
         ctx = request.app.state.ctx
@@ -88,7 +89,7 @@ def _caller(
             ctx.session_secret, request.cookies.get(SESSION_COOKIE), now=time.time()
         )
         if session is not None and not session_has_ended(ctx.sessions, session):
-            caller = caller_for_key_id(ctx.sessions, session.key_id)
+            caller = caller_for_key_id(ctx.sessions, session.key_id, session.key_tag)
             if caller is not None:
                 return caller
     return authenticate(request, credentials)

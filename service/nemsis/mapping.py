@@ -167,7 +167,7 @@ class NemsisRecord:
 
 def _element_order(name: str) -> tuple[str, int]:
     section, _, number = name.partition(".")
-    return section, int(number) if number.isdigit() else 0
+    return section, int(number) if re.fullmatch(r"[0-9]{1,9}", number) else 0
 
 
 def report_uuid(case_id: str, occupant: int) -> str:
@@ -416,7 +416,8 @@ def _vehicle_facts(facts: _Facts) -> dict[str, str]:
         else:
             facts.leave_out(element, f"no vehicle {key.replace('_', ' ')} in the notification")
     year = vehicle.get("model_year")
-    if isinstance(year, str) and re.fullmatch(r"\d{4}", year.strip()):
+    # four ASCII digits: a case stored with another script's digits ("٢٠١٠") is left out
+    if isinstance(year, str) and re.fullmatch(r"[0-9]{4}", year.strip()):
         if YEAR_RANGE[0] <= int(year) <= YEAR_RANGE[1]:
             out["eInjury.20"] = year.strip()
             facts.fill("eInjury.20", "source_mapping.vehicle.model_year")
@@ -472,9 +473,13 @@ def _collision_group(facts: _Facts, parent: etree._Element, i: int) -> None:
     w.add(group, "eInjury.24", str(pdof_clock_hour(pulse.pdof_deg)))
     note.fill("eInjury.24", "result.pulse.pdof_deg (clock hour)")
     rollover = facts.given("crash.rollover")
+    turns = facts.given("crash.rollover_quarter_turns")
     if isinstance(rollover, bool):
         w.add(group, "eInjury.25", codes.ACN_YES_NO[rollover])
         note.fill("eInjury.25", "crash.rollover")
+    elif isinstance(turns, int) and not isinstance(turns, bool) and turns > 0:
+        w.add(group, "eInjury.25", codes.ACN_YES_NO[True])  # a quarter turn is a rollover
+        note.fill("eInjury.25", "crash.rollover_quarter_turns (above 0: yes)")
     else:
         note.leave_out("eInjury.25", "rollover not reported")
     for seat in range(len(case.result.occupants)):

@@ -16,7 +16,7 @@ from typing import Final
 from xml.etree.ElementTree import Element
 
 from service.cases.veds import delta_v_to_kmh
-from service.cases.veds_xml import NC_NAMESPACE, VEDS_NAMESPACES, parse_xml
+from service.cases.veds_xml import NC_NAMESPACE, VEDS_NAMESPACES, is_xsd_decimal, parse_xml
 from service.problems import DomainError
 
 __all__ = ["VedsFacts", "veds_facts"]
@@ -66,8 +66,8 @@ def veds_facts(document: str) -> VedsFacts | None:
             return None
         value = _text(measure, f"{nc}MeasurePointValue")
         unit = (_text(measure, f"{nc}MeasureUnitText") or "").upper()
-        if value is None or unit not in _UNITS:
-            return None
+        if value is None or not is_xsd_decimal(value) or unit not in _UNITS:
+            return None  # Decimal() would also take another script's digits
         try:
             pulses.append(delta_v_to_kmh(Decimal(value), unit))
         except InvalidOperation:

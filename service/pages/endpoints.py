@@ -14,6 +14,7 @@ sign-in form and no case data.
 from __future__ import annotations
 
 import hmac
+import re
 import time
 from datetime import UTC, datetime
 from typing import Any
@@ -27,7 +28,14 @@ from sqlalchemy.exc import TimeoutError as PoolTimeoutError
 
 from models.impact_mode import ImpactMode
 from models.tiers import Tier
-from service.auth import Caller, Role, caller_for_key, caller_for_key_id
+from service.auth import (
+    Caller,
+    Role,
+    caller_for_key,
+    caller_for_key_id,
+    hash_key,
+    session_key_tag,
+)
 from service.cases import service as cases_service
 from service.context import ServiceContext
 from service.db.repository import CaseFilters
@@ -162,7 +170,7 @@ def _identify(request: Request, ctx: ServiceContext) -> tuple[Caller | None, Bro
     session = read_session(ctx.session_secret, request.cookies.get(SESSION_COOKIE), now=time.time())
     if session is None or session_has_ended(ctx.sessions, session):
         return None, None
-    caller = caller_for_key_id(ctx.sessions, session.key_id)
+    caller = caller_for_key_id(ctx.sessions, session.key_id, session.key_tag)
     return caller, session if caller is not None else None
 
 
@@ -260,7 +268,8 @@ def case_list(request: Request, ctx: ContextDep) -> Response:
         if tier and tier not in {t.value for t in Tier}:
             raise ValueError(f"Unknown risk tier {tier!r}: high, moderate or none.")
         limit_text = echo["limit"].strip()
-        if limit_text and not (limit_text.isdigit() and int(limit_text) >= 1):
+        # ASCII digits only (str.isdigit takes "²", which int() refuses), a bounded length
+        if limit_text and not (re.fullmatch(r"[0-9]{1,9}", limit_text) and int(limit_text) >= 1):
             raise ValueError("Per page must be a whole number of at least 1.")
         page = min(
             int(limit_text) if limit_text else settings.page_default_limit, settings.page_max_limit
@@ -351,7 +360,8 @@ async def login(request: Request, ctx: ContextDep) -> Response:
             next_url=next_url,
         )
     ttl = ctx.settings.session_ttl_s
-    value, _ = issue_session(ctx.session_secret, caller.key_id, now=time.time(), ttl_s=ttl)
+    tag = session_key_tag(hash_key(key))
+    value, _ = issue_session(ctx.session_secret, caller.key_id, tag, now=time.time(), ttl_s=ttl)
     response = RedirectResponse(_safe_next(request, next_url), status_code=303)
     response.headers.update(_SECURITY_HEADERS)
     set_session_cookie(response, value, max_age=ttl)

@@ -4,13 +4,15 @@ Design (README, "The case page"): a dispatcher opens ``GET /v1/session``, pastes
 an auditor or admin API key into the form, and ``POST /v1/session`` answers with a
 session cookie::
 
-    aacn_session = base64url({"k": key_id, "e": expires_unix, "n": nonce}) "." HMAC
+    aacn_session = base64url({"k": key_id, "t": key_tag, "e": expires_unix, "n": nonce}) "." HMAC
 
 HMAC-SHA256 under ``ServiceContext.session_secret`` (``AACN_SESSION_SECRET``, or
 random per process). The cookie is HttpOnly, Secure, SameSite=Strict, Path=/v1,
 with a short lifetime (``AACN_SESSION_TTL_S``, 15 minutes by default) that use does
 not renew. It holds no key: every page request looks the key up again by id, so
-a revoked key ends its sessions at once. The Bearer API is untouched.
+a revoked key ends its sessions at once; ``key_tag``, a fingerprint of the key's
+secret (``service.auth.session_key_tag``), must still match it, so a rotated key ends
+them too. The Bearer API is untouched.
 
 CSRF: the only writing routes are the login and the logout. The login form
 carries a token that is also set as a cookie (signed double submit); the logout
@@ -25,6 +27,7 @@ import binascii
 import hashlib
 import hmac
 import json
+import re
 import secrets
 from dataclasses import dataclass
 from urllib.parse import urlsplit
@@ -73,19 +76,28 @@ def _mac(secret: bytes, purpose: str, message: str) -> str:
 
 @dataclass(frozen=True)
 class BrowserSession:
-    """A verified, unexpired session cookie."""
+    """A verified, unexpired session cookie.
+
+    `key_tag` fingerprints the secret of the key it was signed in with
+    (``service.auth.session_key_tag``).
+    """
 
     key_id: int
     expires_at: int
     nonce: str
+    key_tag: str
 
 
-def issue_session(secret: bytes, key_id: int, *, now: float, ttl_s: int) -> tuple[str, int]:
-    """A new session cookie value for an API key id, and its expiry (Unix time)."""
+def issue_session(
+    secret: bytes, key_id: int, key_tag: str, *, now: float, ttl_s: int
+) -> tuple[str, int]:
+    """A new session cookie value for an API key id and the tag of its secret, and its
+    expiry (Unix time)."""
     expires_at = int(now) + ttl_s
     body = _b64(
         json.dumps(
-            {"k": key_id, "e": expires_at, "n": secrets.token_urlsafe(16)}, separators=(",", ":")
+            {"k": key_id, "t": key_tag, "e": expires_at, "n": secrets.token_urlsafe(16)},
+            separators=(",", ":"),
         ).encode()
     )
     return f"{body}.{_mac(secret, 'session', body)}", expires_at
@@ -100,10 +112,14 @@ def read_session(secret: bytes, value: str | None, *, now: float) -> BrowserSess
         return None
     try:
         data = json.loads(_unb64(body))
-        session = BrowserSession(key_id=int(data["k"]), expires_at=int(data["e"]), nonce=data["n"])
+        session = BrowserSession(
+            key_id=int(data["k"]), expires_at=int(data["e"]), nonce=data["n"], key_tag=data["t"]
+        )
     except (ValueError, KeyError, TypeError, binascii.Error):
+        return None  # a cookie without a key tag (signed before it was added) too
+    if not isinstance(session.nonce, str) or not isinstance(session.key_tag, str):
         return None
-    if not isinstance(session.nonce, str) or session.expires_at <= now:
+    if session.expires_at <= now:
         return None
     return session
 
@@ -129,7 +145,7 @@ def check_login_csrf(
     if not message or not hmac.compare_digest(mac, _mac(secret, "login", message)):
         return False
     issued, _, _ = message.partition(":")
-    return issued.isdigit() and now - int(issued) <= LOGIN_CSRF_TTL_S
+    return bool(re.fullmatch(r"[0-9]{1,12}", issued)) and now - int(issued) <= LOGIN_CSRF_TTL_S
 
 
 def same_origin(request: Request) -> bool:

@@ -402,7 +402,7 @@ class CaseView:
     tiers_derived: bool = False
 
 
-_OCCUPANT_PREFIX = re.compile(r"^occupants\[(\d+)\]:\s*")
+_OCCUPANT_PREFIX = re.compile(r"^occupants\[([0-9]{1,9})\]:\s*")
 
 
 def _assumptions(items: Any) -> tuple[list[AssumptionView], dict[int, list[AssumptionView]]]:

@@ -13,6 +13,7 @@ from models.notification import AccelerationPulse, DeltaVPulse, SummaryPulse
 from models.pulse import KMH_PER_MPS, STANDARD_GRAVITY, PulseError, process_pulse
 from models.pulse_plausibility import (
     MAX_DELTA_V_REVERSALS,
+    MAX_OUT_OF_BAND_ENERGY_RATIO,
     count_reversals,
     reversal_band_kmh,
 )
@@ -144,3 +145,79 @@ def test_count_reversals_hysteresis(
     series: list[float], band: float, expected: tuple[int, int]
 ) -> None:
     assert count_reversals(np.asarray(series), band) == expected
+
+
+# ------------------------------------------------- acceleration records that look corrupt
+
+
+def _acceleration(
+    longitudinal: np.ndarray, lateral: np.ndarray | None = None, rate: float = 10_000.0
+) -> AccelerationPulse:
+    lat = np.zeros_like(longitudinal) if lateral is None else lateral
+    return AccelerationPulse(
+        sample_rate_hz=rate,
+        longitudinal_g=tuple(float(x) for x in longitudinal),
+        lateral_g=tuple(float(y) for y in lat),
+    )
+
+
+def _alternating(n: int, amplitude_g: float = 400.0) -> np.ndarray:
+    return amplitude_g * (-1.0) ** np.arange(n)
+
+
+@pytest.mark.parametrize(
+    ("pulse", "field"),
+    [
+        # the record: +/-400 g every sample, 10 kHz, 100 ms
+        (_acceleration(_alternating(1000)), "longitudinal_g"),
+        (_acceleration(_alternating(100), rate=1_000.0), "longitudinal_g"),
+        (_acceleration(_alternating(5000), rate=50_000.0), "longitudinal_g"),
+        (_acceleration(np.zeros(1000), _alternating(1000, 150.0)), "lateral_g"),
+        # on top of a real 40 g pulse: still not a vehicle's motion
+        (
+            _acceleration(
+                -40.0 * np.sin(np.pi * np.arange(1000) / 1000) ** 2 + _alternating(1000, 100.0)
+            ),
+            "longitudinal_g",
+        ),
+    ],
+    ids=["10kHz-100ms", "1kHz", "50kHz", "lateral", "on-a-pulse"],
+)
+def test_an_acceleration_record_changing_sign_every_sample_looks_corrupt(
+    pulse: AccelerationPulse, field: str
+) -> None:
+    p = process_pulse(pulse)
+    assert p.nonphysical is not None
+    assert p.nonphysical.startswith(f"`{field}` changes sign at 100% of its samples")
+
+
+def test_energy_far_above_the_band_looks_corrupt() -> None:
+    # a quarter of the sampling rate: the sign changes every other sample only
+    square = 400.0 * np.where((np.arange(1000) // 2) % 2 == 0, 1.0, -1.0)
+    p = process_pulse(_acceleration(square))
+    assert p.nonphysical is not None
+    assert "more energy above the CFC 60 band than in it" in p.nonphysical
+    assert MAX_OUT_OF_BAND_ENERGY_RATIO < 69.5 < MAX_OUT_OF_BAND_ENERGY_RATIO * 3
+
+
+def test_a_noisy_ringing_crash_record_does_not_look_corrupt() -> None:
+    # a 40 g, 100 ms pulse with structural ringing (1.5 kHz, 30 g; 400 Hz, 5 g) and 15 g
+    # of white noise on both channels: a badly filtered sensor, not a corrupt record
+    rng = np.random.default_rng(49)
+    t = np.arange(2500) / 10_000.0
+    pulse = -40.0 * np.sin(np.pi * t / 0.1) ** 2 * (t <= 0.1)
+    ringing = 30.0 * np.sin(2 * np.pi * 1500.0 * t) * (t <= 0.12) + 5.0 * np.sin(
+        2 * np.pi * 400 * t
+    )
+    p = process_pulse(
+        _acceleration(pulse + ringing + rng.normal(0.0, 15.0, t.size), rng.normal(0.0, 5.0, t.size))
+    )
+    assert p.nonphysical is None
+    # the filter keeps the crash: 40 g over 100 ms is 70.6 km/h; the noise walks a few km/h
+    assert p.delta_v_kmh == pytest.approx(40.0 * STANDARD_GRAVITY * 0.1 / 2 * KMH_PER_MPS, abs=5.0)
+
+
+def test_only_acceleration_records_are_checked_as_sent() -> None:
+    assert process_pulse(SummaryPulse(delta_v_kmh=45.0, pdof_deg=30.0)).nonphysical is None
+    rec = [0, -8, -20, -32, -40, -37, -34, -34, -40, -48, -55, -52, -48, -48, -48]
+    assert process_pulse(_record(rec)).nonphysical is None

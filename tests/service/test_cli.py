@@ -101,6 +101,23 @@ def test_batch_writes_one_line_per_input_and_resumes(tmp_path: Path) -> None:
         assert a == b
 
 
+def test_batch_lines_end_at_newline_only_not_at_a_bare_cr(tmp_path: Path) -> None:
+    """A bare CR is JSON whitespace: it splits no record and shifts no line number."""
+    bodies = [summary(dv) for dv in (20, 35, 50)]
+    with_cr = json.dumps(bodies[1]).replace(", ", ",\r", 3)
+    assert "\r" in with_cr
+    assert json.loads(with_cr) == bodies[1]
+    src, out = tmp_path / "in.jsonl", tmp_path / "out.jsonl"
+    src.write_bytes(
+        (json.dumps(bodies[0]) + "\r\n" + with_cr + "\n" + json.dumps(bodies[2]) + "\n").encode()
+    )
+    assert cli.main(["triage", "--batch", str(src), "--out", str(out)]) == 0
+    records = [json.loads(x) for x in out.read_text().splitlines()]
+    assert [r["line"] for r in records] == [1, 2, 3]
+    assert all("result" in r for r in records), [r.get("error") for r in records]
+    assert [r["result"]["event_id"] for r in records] == [b["event_id"] for b in bodies]
+
+
 def test_batch_pool_matches_one_process(tmp_path: Path) -> None:
     """`--workers 2` (a process pool) writes what one process writes, in input order."""
     bodies = [summary(dv, pdof) for dv in (12, 33, 51, 70) for pdof in (0, 90, 180)]

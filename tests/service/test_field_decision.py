@@ -104,6 +104,40 @@ def test_the_impact_count_is_read_checked_and_named_when_imputed(api: ApiClient)
         assert said in json.dumps(problem), problem
 
 
+def test_quarter_turns_imply_a_rollover_and_contradict_an_explicit_false(api: ApiClient) -> None:
+    """One rule with VEDS: turns above 0 are a rollover; never silently dropped."""
+    body = summary(34.0, 0.0, event_id="turns-imply-rollover")
+    body["crash"].pop("rollover")  # the example says false
+    body["crash"]["rollover_quarter_turns"] = 8
+    r = api.client.post("/v1/cases", json=body, headers=api.headers("submitter"))
+    assert r.status_code == 201, r.text
+    implied = r.json()
+    assert "rollover_reported" in {a["code"] for a in implied["assumptions"]}
+    assert implied["occupants"][0]["field_mode"] == "rollover"
+    # said outright it is the same notification: the same answer, replayed
+    said = json.loads(json.dumps(body))
+    said["crash"]["rollover"] = True
+    again = api.client.post("/v1/cases", json=said, headers=api.headers("submitter"))
+    assert again.status_code == 200, again.text
+    assert again.json()["case_id"] == implied["case_id"]
+    other = summary(34.0, 0.0)
+    other["crash"].update(rollover=True, rollover_quarter_turns=8)
+    rolled = api.client.post("/v1/cases", json=other, headers=api.headers("submitter")).json()
+    p = [o["occupants"][0]["triage"]["probability"] for o in (implied, rolled)]
+    assert p[0] == p[1]
+    # an explicit false with turns is refused, naming the field; nothing stored
+    body["crash"]["rollover"] = False
+    body["event_id"] = "turns-contradict-rollover"
+    r = api.client.post("/v1/cases", json=body, headers=api.headers("submitter"))
+    problem = assert_problem(r, 422)
+    assert [e["field"] for e in problem["errors"]] == ["crash.rollover_quarter_turns"]
+    assert "8 quarter turns contradict rollover false" in problem["errors"][0]["reason"]
+    body["crash"]["rollover_quarter_turns"] = 0  # no turn: false stands
+    assert (
+        api.client.post("/v1/cases", json=body, headers=api.headers("submitter")).status_code == 201
+    )
+
+
 @pytest.mark.parametrize("operating_point", ["acs_cot", "sens85"])
 def test_the_operating_point_is_configurable(tmp_path: Path, operating_point: str) -> None:
     settings = Settings(

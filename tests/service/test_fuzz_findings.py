@@ -109,6 +109,17 @@ def test_duplicate_keys_are_refused_and_nothing_is_stored(api: ApiClient) -> Non
     assert listing["items"] == []
 
 
+def test_an_overlong_integer_is_400_in_the_service_s_words(api: ApiClient) -> None:
+    body = json.dumps(summary()).replace('"delta_v_kmh": 56.0', '"delta_v_kmh": ' + "9" * 5000)
+    problem = assert_problem(_post_text(api, body), 400)
+    assert "a number is too long: an integer of 5000 digits" in problem["detail"], problem
+    assert "sys." not in json.dumps(problem), "the interpreter's words stay inside"
+    # an integer Python can read is the validation's to refuse, naming the field
+    body = json.dumps(summary()).replace('"delta_v_kmh": 56.0', '"delta_v_kmh": ' + "9" * 4300)
+    problem = assert_problem(_post_text(api, body), 422)
+    assert problem["errors"][0]["field"] == "crash.pulse.delta_v_kmh"
+
+
 def test_deeply_nested_bodies_are_400(api: ApiClient) -> None:
     assert_problem(_post_text(api, "[" * 5000 + "]" * 5000), 400)
 
@@ -396,6 +407,9 @@ def test_keys_revoke_by_name_or_id_is_enforced_at_once(
     h_b = {"Authorization": f"Bearer {key_b}"}
     assert_problem(client.post("/v1/cases", json=summary(), headers=h_b), 401)
     assert cli.main(["keys", "revoke", "no-such-key"]) == 1
+    for other_digits in ("²", "٢", "１"):  # digits str.isdigit takes and int() may not
+        assert cli.main(["keys", "revoke", other_digits]) == 1
+        assert f"no API key named or numbered {other_digits!r}" in capsys.readouterr().err
 
 
 def test_keys_rotate_replaces_the_secret_at_once(

@@ -86,6 +86,29 @@ def test_readyz_is_503_when_the_database_is_unreachable(tmp_path: Path) -> None:
         assert "127.0.0.1" not in problem["detail"], "no internal host names"
 
 
+def test_a_start_without_its_store_is_alive_and_not_ready(
+    tmp_path: Path, caplog: pytest.LogCaptureFixture
+) -> None:
+    """The default AACN_AUTO_MIGRATE=true on an unreachable store: no crash, one log line,
+    /readyz 503 (no API key can be verified), a POST 503 to retry."""
+    settings = Settings(
+        database_url="postgresql+psycopg://nobody@127.0.0.1:9/none?connect_timeout=2",
+        spool_path=tmp_path / "spool.db",
+    )
+    assert settings.auto_migrate
+    with caplog.at_level("WARNING", logger="aacn_triage"), TestClient(create_app(settings)) as c:
+        assert c.get("/livez").status_code == 200
+        problem = assert_problem(c.get("/readyz"), 503)
+        assert "no API key can be verified" in problem["detail"]
+        assert "migration runs once it returns" in problem["detail"]
+        posted = c.post("/v1/cases", json=summary(), headers={"Authorization": "Bearer aacn_x"})
+        assert_problem(posted, 503)
+        assert posted.headers["Retry-After"]
+    started = [r for r in caplog.records if "the store is unreachable" in r.getMessage()]
+    assert len(started) == 1
+    assert started[0].exc_info is None, "one line, no traceback"
+
+
 def test_metrics_count_requests_decisions_and_engine_time(api: ApiClient) -> None:
     h = api.headers("submitter")
     api.client.post("/v1/cases", json=summary(70, belted=False, airbag="absent"), headers=h)

@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import multiprocessing
+from typing import Any
+
 import pytest
 from alembic.autogenerate import compare_metadata
 from alembic.migration import MigrationContext
@@ -46,3 +49,30 @@ def test_migrations_match_the_table_definitions(url: str) -> None:
     finally:
         engine.dispose()
     assert diff == [], f"the tables and the migrations disagree: {diff}"
+
+
+def _migrate_at(url: str, start: Any, out: Any) -> None:
+    """In a process of its own (Alembic's ``context`` is one per process): migrate at once."""
+    start.wait(60)
+    try:
+        migrate.upgrade(url)
+    except Exception as exc:  # reported to the test
+        out.put(f"{type(exc).__name__}: {exc}")
+    else:
+        out.put("ok")
+
+
+@pytest.mark.postgres
+def test_processes_migrating_at_once_take_turns(postgres_url: str) -> None:
+    """Workers or replicas whose store just returned migrate at the same moment: the
+    advisory lock of migrations/env.py lets one migrate and the others find it done."""
+    ctx = multiprocessing.get_context("spawn")
+    start, out = ctx.Barrier(3), ctx.Queue()
+    procs = [ctx.Process(target=_migrate_at, args=(postgres_url, start, out)) for _ in range(3)]
+    for p in procs:
+        p.start()
+    results = [out.get(timeout=240) for _ in procs]
+    for p in procs:
+        p.join(60)
+    assert results == ["ok"] * 3
+    assert migrate.current_revision(postgres_url) == migrate.head_revision()

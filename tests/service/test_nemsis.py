@@ -350,6 +350,16 @@ def test_rollover_multiple_impacts_and_the_decision(api: ApiClient) -> None:
     assert _text(group, "n:eInjury.24") == "12"  # 345 deg: nearer 12 than 11
 
 
+def test_quarter_turns_alone_say_there_was_a_rollover(api: ApiClient) -> None:
+    body = summary(40.0, 0.0)
+    del body["crash"]["rollover"]
+    body["crash"]["rollover_quarter_turns"] = 2
+    r, tree = _record(api, post_case(api, body)["case_id"])
+    (pcr,) = _reports(tree)
+    assert _text(pcr, "n:eInjury/n:eInjury.CollisionGroup/n:eInjury.25") == "Y"
+    assert "eInjury.25" not in r.headers["NEMSIS-Left-Out"]
+
+
 def test_an_impact_count_alone_says_whether_there_were_multiple_impacts(api: ApiClient) -> None:
     for count, code in ((3, "9923003"), (1, "9923001")):
         body = summary(40.0, 0.0)
@@ -523,6 +533,64 @@ def test_a_veds_case_without_a_crash_time_has_none_in_its_record(api: ApiClient)
     for pcr in _reports(tree):
         assert pcr.find("n:eInjury/n:eInjury.CollisionGroup/n:eInjury.14", NS) is None
         assert _not_recorded(pcr, "n:eSituation/n:eSituation.01")
+
+
+_YEAR_ELEMENT = "veds:Crash/veds:CrashVehicle/nc:ItemModelYearDate"
+
+
+@pytest.mark.parametrize("year", ["٢٠١٠", "２０１０", "20x0", "1890"])
+def test_a_veds_model_year_that_is_none_is_dropped_and_said_so(api: ApiClient, year: str) -> None:
+    raw = (VEDS_DIR / "kph-frontal.xml").read_bytes()
+    assert raw.count(b">2010</nc:ItemModelYearDate>") == 1
+    raw = raw.replace(b">2010</nc:ItemModelYearDate>", f">{year}</nc:ItemModelYearDate>".encode())
+    result = _post_veds(api, raw)  # the crash is triaged all the same
+    dropped = [a for a in result["assumptions"] if a["code"] == "veds_model_year_dropped"]
+    assert len(dropped) == 1, result["assumptions"]
+    assert _YEAR_ELEMENT in dropped[0]["message"]
+    assert year in dropped[0]["message"]
+    assert "model_year_imputed" in {a["code"] for a in result["assumptions"]}
+    stored = stored_case(api, result["case_id"])
+    assert "vehicle" not in stored["notification"]
+    assert stored["source_mapping"]["vehicle"]["model_year"] is None
+    r, tree = _record(api, result["case_id"])
+    for pcr in _reports(tree):
+        assert pcr.find("n:eInjury/n:eInjury.CollisionGroup/n:eInjury.20", NS) is None
+    assert "eInjury.20" in r.headers["NEMSIS-Left-Out"]
+
+
+def test_a_case_stored_with_another_script_s_year_still_exports(
+    api: ApiClient,
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    """Cases stored before the year was checked keep whatever the document said."""
+    from service.db.tables import Case
+
+    case_id = _post_veds(api, (VEDS_DIR / "kph-frontal.xml").read_bytes())["case_id"]
+    ctx = api.client.app.state.ctx  # type: ignore[attr-defined]
+    with ctx.sessions.begin() as session:  # written as the mapping stored them then
+        case = session.get(Case, case_id)
+        mapping = copy.deepcopy(case.source_mapping)
+        assert mapping["vehicle"]["model_year"] == "2010"
+        mapping["vehicle"]["model_year"] = "٢٠١٠"
+        case.source_mapping = mapping
+    assert stored_case(api, case_id)["source_mapping"]["vehicle"]["model_year"] == "٢٠١٠"
+    r, tree = _record(api, case_id)
+    for pcr in _reports(tree):
+        assert pcr.find("n:eInjury/n:eInjury.CollisionGroup/n:eInjury.20", NS) is None
+    assert "eInjury.20" in r.headers["NEMSIS-Left-Out"]
+    monkeypatch.setenv("AACN_DATABASE_URL", api.settings.database_url)
+    out = tmp_path / "records"
+    get_settings.cache_clear()
+    try:
+        argv = ["cases", "export", "--nemsis", "--out", str(out), "--since", "2000-01-01T00:00Z"]
+        agency = [f"--{k.replace('_', '-')}={v}" for k, v in AGENCY.items()]
+        assert cli.main([*argv, *agency]) == 0, capsys.readouterr().err
+    finally:
+        get_settings.cache_clear()
+    assert sorted(p.name for p in out.iterdir()) == [f"{case_id}.json", f"{case_id}.xml"]
+    assert (out / f"{case_id}.xml").read_bytes() == r.content
 
 
 # ----------------------------------------------------------------- access

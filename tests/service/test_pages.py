@@ -15,6 +15,7 @@ from fastapi.testclient import TestClient
 
 from models.injury import criteria, risk
 from models.notification import Body
+from service.auth import session_key_tag
 from service.cases import service as cases_service
 from service.db import repository
 from service.db.tables import ApiKey, Case
@@ -415,14 +416,46 @@ def test_forged_expired_and_revoked_sessions_are_refused(api: ApiClient) -> None
     assert visit(body + "." + mac[::-1]) == 401
     assert visit(body[:-2] + "AA." + mac) == 401
     with ctx.sessions() as session:
-        key_id = repository.get_api_key_by_name(session, "auditor-client").id
-    expired, _ = issue_session(ctx.session_secret, key_id, now=time.time() - 3600, ttl_s=60)
+        row = repository.get_api_key_by_name(session, "auditor-client")
+        key_id, tag = row.id, session_key_tag(row.key_sha256)
+    fresh, _ = issue_session(ctx.session_secret, key_id, tag, now=time.time(), ttl_s=600)
+    assert visit(fresh) == 200, "the tests' own cookie is a real one"
+    expired, _ = issue_session(ctx.session_secret, key_id, tag, now=time.time() - 3600, ttl_s=60)
     assert visit(expired) == 401
-    other_secret, _ = issue_session(b"x" * 32, key_id, now=time.time(), ttl_s=600)
+    other_secret, _ = issue_session(b"x" * 32, key_id, tag, now=time.time(), ttl_s=600)
     assert visit(other_secret) == 401
+    other_tag, _ = issue_session(ctx.session_secret, key_id, "0" * 32, now=time.time(), ttl_s=600)
+    assert visit(other_tag) == 401, "signed in with another secret of the key"
     with ctx.sessions.begin() as session:
         session.get(ApiKey, key_id).revoked_at = datetime.now(UTC)
     assert visit(good) == 401, "revoking the key ends its sessions at once"
+
+
+def test_keys_rotate_ends_the_key_s_sessions_at_once(
+    api: ApiClient, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from service.cli import main as cli
+    from service.settings import get_settings
+
+    browser = _browser(api)
+    assert _sign_in(browser, api.keys["auditor"]).status_code == 303
+    case_id = post_case(api, summary_body())["case_id"]
+    nemsis = f"/v1/cases/{case_id}/nemsis"
+    agency = {"agency_state_id": "C034", "agency_number": "351-C034P2", "agency_state": "09"}
+    assert browser.get("/v1/reports").status_code == 200
+    assert browser.get(nemsis, params=agency).status_code == 200
+    monkeypatch.setenv("AACN_DATABASE_URL", api.settings.database_url)
+    get_settings.cache_clear()
+    try:
+        assert cli.main(["keys", "rotate", "auditor-client"]) == 0
+    finally:
+        get_settings.cache_clear()
+    new_secret = capsys.readouterr().out.strip()
+    assert [browser.get("/v1/reports").status_code for _ in range(4)] == [401] * 4
+    assert browser.get(nemsis, params=agency).status_code == 401
+    again = _browser(api)
+    assert _sign_in(again, new_secret).status_code == 303
+    assert again.get("/v1/reports").status_code == 200
 
 
 def test_logout_needs_its_token_and_clears_the_cookie(api: ApiClient) -> None:
@@ -451,7 +484,8 @@ def test_a_configured_secret_signs_sessions_across_processes(tmp_path: Any) -> N
         ctx0, ctx1 = apps[0].state.ctx, apps[1].state.ctx
         assert ctx0.session_secret == ctx1.session_secret == secret.encode()
         row, _ = create_api_key(ctx0.sessions, name="aud", role=Role.AUDITOR)
-        value, _ = issue_session(ctx0.session_secret, row.id, now=time.time(), ttl_s=600)
+        tag = session_key_tag(row.key_sha256)
+        value, _ = issue_session(ctx0.session_secret, row.id, tag, now=time.time(), ttl_s=600)
         other = TestClient(apps[1], base_url="https://testserver")
         other.cookies.set(SESSION_COOKIE, value, domain="testserver.local", path="/v1")
         assert other.get("/v1/reports").status_code == 200
@@ -577,6 +611,13 @@ def test_the_case_list_filters_like_the_api(api: ApiClient) -> None:
         r = api.client.get("/v1/reports", params=params, headers=api.headers("auditor"))
         assert r.status_code == 422
         assert Page(r.text).all("p", role="alert")
+    # digits of other scripts, and too many, are named in the page's words
+    for limit in ("²", "٢", "1" * 5000):
+        r = api.client.get("/v1/reports", params={"limit": limit}, headers=api.headers("auditor"))
+        assert r.status_code == 422
+        page = Page(r.text)
+        (alert,) = page.all("p", role="alert")
+        assert page.text(alert) == "Per page must be a whole number of at least 1.", limit
 
 
 # ---------------------------------------------------------------- drawings, limits

@@ -402,6 +402,44 @@ def test_a_document_the_notification_cannot_take_is_422_naming_the_element(
     assert _case_count(api) == 0
 
 
+@pytest.mark.parametrize("pulse", [1, 2])
+def test_quarter_turns_beyond_the_limit_name_their_veds_element(api: ApiClient, pulse: int) -> None:
+    raw = _doc("kph-rollover-two-pulses.xml")
+    written = (b">0</" if pulse == 1 else b">4</") + b"veds:CrashPulseRolloverQuarterTurnsValue>"
+    assert raw.count(written) == 1
+    raw = raw.replace(written, b">999</veds:CrashPulseRolloverQuarterTurnsValue>")
+    problem = assert_problem(_post_veds(api, raw), 422)
+    element = (
+        f"veds:Crash/veds:CrashVehicle/veds:VehicleCrashPulse[{pulse}]"
+        "/veds:CrashPulseRolloverQuarterTurnsValue"
+    )
+    assert [e["field"] for e in problem["errors"]] == [element], problem
+    assert "40" in problem["errors"][0]["reason"]
+    assert _case_count(api) == 0
+
+
+def test_quarter_turns_follow_the_json_rule_for_the_rollover_indicator(api: ApiClient) -> None:
+    """Turns with the indicator left out are a rollover; with it false they are refused."""
+    raw = _doc("kph-frontal.xml").replace(
+        b">0</veds:CrashPulseRolloverQuarterTurnsValue>",
+        b">3</veds:CrashPulseRolloverQuarterTurnsValue>",
+    )
+    problem = assert_problem(_post_veds(api, raw), 422)
+    assert [(e["field"], e["type"]) for e in problem["errors"]] == [
+        (f"{_PULSE}/veds:CrashPulseRolloverQuarterTurnsValue", "veds_rollover_contradiction")
+    ]
+    assert "veds:VehicleRolloverIndicator false" in problem["errors"][0]["reason"]
+    assert _case_count(api) == 0
+    left_out = raw.replace(
+        b"<veds:VehicleRolloverIndicator>false</veds:VehicleRolloverIndicator>", b""
+    )
+    r = _post_veds(api, left_out)
+    assert r.status_code == 201, r.text
+    assert "rollover_reported" in _codes(r.json())
+    crash = stored_case(api, r.json()["case_id"])["notification"]["crash"]
+    assert (crash["rollover"], crash["rollover_quarter_turns"]) == (True, 3)
+
+
 def test_a_document_without_a_pulse_or_an_occupied_seat_is_422(api: ApiClient) -> None:
     raw = _doc("kph-frontal.xml")
     start, end = raw.index(b"<veds:VehicleCrashPulse>"), raw.index(b"</veds:VehicleCrashPulse>")
