@@ -32,6 +32,7 @@ __all__ = [
     "SummaryPulse",
     "DUMMY_STATURE_MASS",
     "nearest_body",
+    "pediatric_crash_criterion",
     "summary_notification",
 ]
 
@@ -337,6 +338,42 @@ class Occupant:
         if self.age_years is not None:
             return self.age_years < 16.0
         return self.child_restraint is not None and self.child_restraint.child_seat
+
+    @property
+    def pediatric_crash_criterion(self) -> bool:
+        """The field triage guideline's pediatric crash criterion: a child of 0-9 years
+        unrestrained or in an unsecured child seat (2021 guideline; NEMSIS 2904029).
+
+        A child seat (any kind) stands for a child under 10 where the age is unknown
+        (NHTSA's car seat recommendations: boosters to about 9). Unrestrained: the
+        restraint said to be none, or a belt sensed unfastened; unsecured: as a person
+        said (a car cannot sense it).
+        """
+        return pediatric_crash_criterion(
+            self.age_years,
+            self.child_restraint,
+            self.belted if self.belt_known else None,
+            self.child_restraint_unsecured,
+        )
+
+
+def pediatric_crash_criterion(
+    age_years: float | None,
+    child_restraint: ChildRestraint | None,
+    belted: bool | None,
+    unsecured: bool | None,
+) -> bool:
+    """:attr:`Occupant.pediatric_crash_criterion` from its fields (`belted` None: unknown)."""
+    if age_years is not None:
+        young = age_years < 10.0
+    else:
+        young = child_restraint is not None and child_restraint.child_seat
+    if not young:
+        return False
+    unrestrained = child_restraint is ChildRestraint.NONE or (
+        child_restraint is None and belted is False
+    )
+    return unrestrained or bool(unsecured)
 
 
 @dataclass(frozen=True)

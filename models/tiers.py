@@ -29,10 +29,14 @@ from typing import Final
 
 __all__ = [
     "HIGH_RISK_THRESHOLD",
+    "PEDIATRIC_CRITERION_MAX_AGE_YEARS",
+    "PEDIATRIC_CRITERION_WORDS",
+    "PEDIATRIC_WORDS",
     "RECOMMENDATIONS",
     "Tier",
     "ThresholdOrderError",
     "check_threshold_order",
+    "child_recommendation",
     "recommendation",
     "second_opinion_recommendation",
     "tier_of",
@@ -92,6 +96,34 @@ def recommendation(tier: Tier) -> str:
     The one place the words are chosen: a variant (e.g. for children) is added here.
     """
     return RECOMMENDATIONS[tier]
+
+
+#: The pediatric sentence of a child's field decision. [V] 2021 National Guideline for
+#: the Field Triage of Injured Patients (Newgard et al. 2022; crash-data-and-triage.md
+#: section 4): injured children go preferentially to trauma centers with pediatric
+#: capability.
+PEDIATRIC_WORDS: Final[str] = (
+    "A child: prefer a trauma center with pediatric capability (2021 guideline)."
+)
+
+#: The guideline's pediatric crash criterion, a criterion of its own. [V] 2021 guideline,
+#: high-risk auto crash: "child (age 0-9 years) unrestrained or in unsecured child safety
+#: seat" (NEMSIS eInjury.04 2904029).
+PEDIATRIC_CRITERION_WORDS: Final[str] = (
+    "Guideline criterion met: a child of 0-9 years unrestrained or in an unsecured child "
+    "seat (2021 guideline, high-risk auto crash): consider a trauma center with pediatric "
+    "capability whatever the telemetry says."
+)
+
+#: Ages of the pediatric crash criterion, years ([0, 10)).
+PEDIATRIC_CRITERION_MAX_AGE_YEARS: Final[float] = 10.0
+
+
+def child_recommendation(tier: Tier, criterion: bool) -> str:
+    """The words of a child's field decision of `tier`: the tier's, then the pediatric
+    sentence, and the pediatric crash criterion first where it applies."""
+    words = f"{RECOMMENDATIONS[tier]} {PEDIATRIC_WORDS}"
+    return f"{PEDIATRIC_CRITERION_WORDS} {words}" if criterion else words
 
 
 def second_opinion_recommendation(positive: bool) -> str:

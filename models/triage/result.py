@@ -234,3 +234,6 @@ class TriageResult:
     timings_ms: Mapping[str, float] = field(compare=False)
     #: P(anyone in the vehicle ISS 15+); None with a MAIS 3+ field model (2.0.0)
     vehicle: VehicleRiskAnswer | None = None
+    #: Where the delta-V came from: ``measured`` (the vehicle's sensors) or
+    #: ``reconstructed`` (from crush, as the field data's)
+    delta_v_source: str = "measured"

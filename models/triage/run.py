@@ -14,7 +14,7 @@ from models.notification import (
     Occupant,
 )
 from models.pulse import process_pulse
-from models.tiers import tier_of
+from models.tiers import child_recommendation, tier_of
 from models.triage.decision import (
     _field_decision,
     _risk_decision,
@@ -27,6 +27,7 @@ from models.triage.field_evidence import (
     _field_assumptions,
     _occupant_evidence,
     _risk_assumptions,
+    delta_v_source,
     risk_inputs,
 )
 from models.triage.loading import EngineModels
@@ -177,6 +178,13 @@ def triage(notification: CrashNotification, models: EngineModels) -> TriageResul
             inputs, risk = all_inputs[i], all_risks[i]
             risk_predictions.append(risk)
             decision = _risk_decision(field_model, models, risk)
+            if occupant.child and decision.tier is not None:  # the guideline's pediatric words
+                decision = dataclasses.replace(
+                    decision,
+                    recommendation=child_recommendation(
+                        decision.tier, occupant.pediatric_crash_criterion
+                    ),
+                )
             answered = dataclasses.replace(
                 _occupant_triage(occupant, evidence, decision, FieldMode(risk.mode)),
                 region_risk=risk.regions,
@@ -216,4 +224,5 @@ def triage(notification: CrashNotification, models: EngineModels) -> TriageResul
             "engine_total": 1000.0 * (t2 - t0),
         },
         vehicle=vehicle,
+        delta_v_source=delta_v_source(notification.pulse).value,
     )

@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import dataclasses
 from datetime import datetime
-from typing import Any
+from typing import Any, Literal
 
 from pydantic import (
     BaseModel,
@@ -171,6 +171,14 @@ class PulseOut(OutModel):
     peak_accel_g: float = Field(description="Peak resultant acceleration, g.")
     duration_ms: float = Field(description="Pulse duration, ms.")
     haversine: HaversineOut
+    delta_v_source: Literal["measured", "reconstructed"] = Field(
+        default="measured",
+        description="Where the delta-V came from: `measured` by the vehicle (EDR or telematics; "
+        "acceleration and EDR delta-V pulses, and a summary unless it says otherwise) or "
+        "`reconstructed` from crush (as the field data's). A case stored before the source "
+        "was recorded reads `measured`: its notification was a vehicle's, read by the field "
+        "model of its day as if reconstructed (`cases rescore` lists the advice that changes).",
+    )
 
 
 class SensorInputsOut(OutModel):
@@ -600,6 +608,9 @@ def to_case_result(
         ),
         occupants=[_occupant_out(o) for o in result.occupants],
         pulse=PulseOut(
+            delta_v_source="reconstructed"
+            if result.delta_v_source == "reconstructed"
+            else "measured",
             delta_v_kmh=p.delta_v_kmh,
             delta_v_longitudinal_kmh=p.delta_v_longitudinal_kmh,
             delta_v_lateral_kmh=p.delta_v_lateral_kmh,

@@ -23,6 +23,7 @@ from enum import Enum
 from typing import Final
 
 __all__ = [
+    "CHILD_RESTRAINT_EQUIPMENT",
     "AGE_UNIT_MONTHS",
     "AGE_UNIT_YEARS",
     "AIRBAG_DEPLOYMENT",
@@ -35,6 +36,7 @@ __all__ = [
     "SEAT_ROW_LOCATION_RIGHT_HAND_DRIVE",
     "SECTIONS",
     "SEX",
+    "TRIAGE_CHILD_UNRESTRAINED",
     "TRIAGE_TELEMETRY_SEVERE",
     "VEDS_SEAT_LOCATION",
     "VELOCITY_UNIT_KMH",
@@ -60,6 +62,21 @@ VELOCITY_UNIT_KMH: Final = "9921001"
 #: eInjury.04 (eInjury_v3.xsd ``TraumaTriageCriteriaSteps3and4``): "Auto Crash: Vehicle
 #: telemetry data consistent with severe injury".
 TRIAGE_TELEMETRY_SEVERE: Final = "2904013"
+#: eInjury.04: "Auto Crash: Child (age 0-9 years) unrestrained or in unsecured child
+#: safety seat" (the 2021 guideline's pediatric crash criterion).
+TRIAGE_CHILD_UNRESTRAINED: Final = "2904029"
+#: eInjury.07 "Use of Occupant Safety Equipment" (eInjury_v3.xsd
+#: ``UseOfOccupantSafetyEquipment``) of the wire's `child_restraint`: infant seats rear
+#: and forward facing, booster, a seat of unknown kind as Other, the lap-shoulder belt,
+#: none.
+CHILD_RESTRAINT_EQUIPMENT: Final[dict[str, str]] = {
+    "rear_facing_seat": "2907009",  # Infant Car Seat Rear Facing
+    "forward_facing_seat": "2907007",  # Infant Car Seat Forward Facing
+    "booster": "2907001",  # Child Booster Seat
+    "child_seat_unknown_kind": "2907017",  # Other
+    "lap_shoulder_belt": "2907027",  # Shoulder and Lap Belt Used
+    "none": "2907015",  # None
+}
 #: eDispatch.01 (eDispatch_v3.xsd ``DispatchReason``): "Traffic/Transportation Incident".
 COMPLAINT_TRAFFIC_INCIDENT: Final = "2301069"
 #: ePatient.16 (ePatient_v3.xsd ``AgeUnits``): Years, Months.

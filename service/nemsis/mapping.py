@@ -38,6 +38,7 @@ from typing import Any, Final
 from lxml import etree
 from pydantic import AwareDatetime, TypeAdapter, ValidationError
 
+from models.notification import ChildRestraint, pediatric_crash_criterion
 from models.tiers import HIGH_RISK_THRESHOLD, Tier
 from service import __version__
 from service.cases.result import StoredCase
@@ -523,10 +524,21 @@ def _injury(facts: _Facts, parent: etree._Element, i: int) -> None:
     section = w.add(parent, "eInjury")
     w.not_recorded(section, "eInjury.01")
     w.not_recorded(section, "eInjury.03")
+    criteria = []
     if facts.case.result.occupants[i].triage.tier in (Tier.HIGH, Tier.MODERATE):
-        w.add(section, "eInjury.04", codes.TRIAGE_TELEMETRY_SEVERE)
+        criteria.append(codes.TRIAGE_TELEMETRY_SEVERE)
         facts.fill("eInjury.04", f"result.occupants[{i}].triage.tier (high, moderate: 2904013)", i)
-    else:
+    if _pediatric_criterion(facts, i):
+        criteria.append(codes.TRIAGE_CHILD_UNRESTRAINED)
+        facts.fill(
+            "eInjury.04",
+            f"occupants[{i}].age_years, child_restraint, belted, child_restraint_unsecured "
+            "(a child of 0-9 unrestrained or in an unsecured seat: 2904029)",
+            i,
+        )
+    for code in criteria:
+        w.add(section, "eInjury.04", code)
+    if not criteria:
         w.not_recorded(section, "eInjury.04")
     row = _seat_row_location(facts, i)
     if row is not None:
@@ -534,6 +546,10 @@ def _injury(facts: _Facts, parent: etree._Element, i: int) -> None:
         facts.fill("eInjury.06", f"occupants[{i}].seat, vehicle.drive_side", i)
     else:
         facts.leave_out("eInjury.06", "the side of the car of this seat is not known", i)
+    restraint = facts.given("child_restraint", i)
+    if isinstance(restraint, str) and restraint in codes.CHILD_RESTRAINT_EQUIPMENT:
+        w.add(section, "eInjury.07", codes.CHILD_RESTRAINT_EQUIPMENT[restraint])
+        facts.fill("eInjury.07", f"occupants[{i}].child_restraint", i)
     bags = _airbag_deployment(facts, i)
     if bags is None:
         facts.leave_out("eInjury.08", "the airbags at this seat are not all reported", i)
@@ -542,6 +558,24 @@ def _injury(facts: _Facts, parent: etree._Element, i: int) -> None:
             w.add(section, "eInjury.08", code)
         facts.fill("eInjury.08", f"occupants[{i}].frontal_airbag, side_airbag", i)
     _collision_group(facts, section, i)
+
+
+def _pediatric_criterion(facts: _Facts, i: int) -> bool:
+    """The guideline's pediatric crash criterion from occupant `i`'s stored fields."""
+    age = facts.given("age_years", i)
+    restraint = facts.given("child_restraint", i)
+    belted = facts.given("belted", i)
+    unsecured = facts.given("child_restraint_unsecured", i)
+    try:
+        kind = ChildRestraint(restraint) if isinstance(restraint, str) else None
+    except ValueError:
+        kind = None
+    return pediatric_crash_criterion(
+        float(age) if isinstance(age, int | float) and not isinstance(age, bool) else None,
+        kind,
+        belted if isinstance(belted, bool) else None,
+        unsecured if isinstance(unsecured, bool) else None,
+    )
 
 
 #: The narrative's words for each tier (``models.tiers``).
@@ -571,6 +605,7 @@ def narrative(case: StoredCase, i: int) -> str:
         f"{_pct_text(low)} to {_pct_text(up)}), {d.model}"
         + (f" at operating point {d.operating_point}" if d.operating_point else "")
         + f". Recommendation: {d.recommendation}"
+        + _delta_v_words(case)
     )
     if case.tiers_derived:
         text += (
@@ -578,6 +613,16 @@ def narrative(case: StoredCase, i: int) -> str:
             "threshold, the high-risk threshold at its default.)"
         )
     return text
+
+
+def _delta_v_words(case: StoredCase) -> str:
+    """The delta-V and where it came from (measured by the vehicle, or reconstructed)."""
+    source = case.result.pulse.delta_v_source
+    source_words = {
+        "measured": "measured by the vehicle (EDR or telematics)",
+        "reconstructed": "reconstructed from the vehicle's crush",
+    }.get(str(source), str(source))
+    return f" Delta-V {case.result.pulse.delta_v_kmh:.1f} km/h, {source_words}."
 
 
 def _narrative(facts: _Facts, parent: etree._Element, i: int) -> None:

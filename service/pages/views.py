@@ -588,6 +588,9 @@ def _impacts(crash: Mapping[str, Any]) -> str:
     return _yes_no(crash.get("multiple_impacts"))
 
 
+_DELTA_V_SOURCES = {"measured": "measured by the vehicle", "reconstructed": "reconstructed"}
+
+
 def _crash_view(
     notification: Mapping[str, Any],
     result: Mapping[str, Any],
@@ -603,7 +606,8 @@ def _crash_view(
     dv = _num(derived.get("delta_v_kmh"))
     pdof = _num(derived.get("pdof_deg"))
     if dv is not None:
-        facts.append(("Delta-V (resultant)", f"{dv:.1f} km/h"))
+        how = _DELTA_V_SOURCES.get(str(derived.get("delta_v_source", "measured")), "")
+        facts.append(("Delta-V (resultant)", f"{dv:.1f} km/h, {how}"))
     lon = _num(derived.get("delta_v_longitudinal_kmh"))
     lat = _num(derived.get("delta_v_lateral_kmh"))
     if lon is not None and lat is not None:

@@ -184,3 +184,36 @@ def test_an_adult_of_unknown_age_is_integrated_not_taken_at_the_median(api: ApiC
     at_median = post_case(api, median)["occupants"][0]["triage"]
     assert at_median["unknown_inputs_range95"] is None
     assert t["probability"] != at_median["probability"]
+
+
+def _nemsis(api: ApiClient, case_id: str) -> etree._Element:
+    r = api.client.get(f"/v1/cases/{case_id}/nemsis", params=AGENCY, headers=api.headers("auditor"))
+    assert r.status_code == 200, r.text
+    assert validate(r.content) == []
+    return etree.fromstring(r.content).findall("n:Header/n:PatientCareReport", NS)[0]
+
+
+def test_the_pediatric_criterion_and_the_child_restraint_reach_ems(api: ApiClient) -> None:
+    """eInjury.04 2904029 for a child of 0-9 unrestrained or in an unsecured seat (with the
+    guideline's words in the recommendation), eInjury.07 the child restraint's kind."""
+    loose = post_case(api, _child_in_seat(age_years=5, child_restraint="none"))
+    t = loose["occupants"][0]["triage"]
+    assert "unrestrained or in an unsecured child seat" in t["recommendation"]
+    pcr = _nemsis(api, loose["case_id"])
+    criteria = [e.text for e in pcr.findall("n:eInjury/n:eInjury.04", NS)]
+    assert "2904029" in criteria
+    assert [e.text for e in pcr.findall("n:eInjury/n:eInjury.07", NS)] == ["2907015"]
+    booster = post_case(api, _child_in_seat(age_years=7, child_restraint="booster"))
+    assert "unsecured" not in booster["occupants"][0]["triage"]["recommendation"]
+    pcr = _nemsis(api, booster["case_id"])
+    assert "2904029" not in [e.text for e in pcr.findall("n:eInjury/n:eInjury.04", NS)]
+    assert [e.text for e in pcr.findall("n:eInjury/n:eInjury.07", NS)] == ["2907001"]
+    unsecured = post_case(
+        api,
+        _child_in_seat(
+            age_years=2, child_restraint="rear_facing_seat", child_restraint_unsecured=True
+        ),
+    )
+    pcr = _nemsis(api, unsecured["case_id"])
+    assert "2904029" in [e.text for e in pcr.findall("n:eInjury/n:eInjury.04", NS)]
+    assert [e.text for e in pcr.findall("n:eInjury/n:eInjury.07", NS)] == ["2907009"]

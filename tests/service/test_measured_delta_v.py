@@ -29,7 +29,7 @@ def test_a_summary_without_a_source_is_read_as_measured(api: ApiClient) -> None:
     answer = post_case(api, _body())
     assert "delta_v_measured" in _codes(answer)
     stored = stored_case(api, answer["case_id"])
-    assert stored["notification"]["crash"]["pulse"]["delta_v_source"] == "measured"
+    assert stored["result"]["pulse"]["delta_v_source"] == "measured"
     assert answer["occupants"][0]["triage"]["knowledge"].endswith("_measured")
     # the measurement model is named with the field model, in the answer and the stored case
     assert answer["models"]["delta_v_measurement"]["name"] == "delta_v_measurement"
@@ -42,6 +42,7 @@ def test_measured_answers_lower_than_the_same_number_reconstructed(api: ApiClien
     measured = post_case(api, _body(45.0))["occupants"][0]["triage"]
     rebuilt = post_case(api, _body(45.0, delta_v_source="reconstructed"))
     assert "delta_v_measured" not in _codes(rebuilt)
+    assert rebuilt["pulse"]["delta_v_source"] == "reconstructed"
     reconstructed = rebuilt["occupants"][0]["triage"]
     assert measured["probability"] < reconstructed["probability"]
     assert reconstructed["knowledge"] == "adult"
