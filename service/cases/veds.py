@@ -500,9 +500,8 @@ def _occupants(m: _Mapper, vehicle: Element, vehicle_path: str) -> list[dict[str
         monitored = m.boolean(
             seat_element, "veds:VehicleSeatbeltMonitoredIndicator", path, required=False
         )
-        belted: bool | None
+        occupant: dict[str, Any] = {"seat": seat.value}  # belt unknown: integrated over
         if fastened is None or monitored is False:
-            belted = None  # unknown: the field risk model integrates over belt use
             why = "not reported" if fastened is None else "not monitored"
             m.assume(
                 AssumptionCode.VEDS_BELT_NOT_REPORTED,
@@ -511,12 +510,9 @@ def _occupants(m: _Mapper, vehicle: Element, vehicle_path: str) -> list[dict[str
                 field=f"{prefix}.belted",
             )
         else:
-            belted = fastened
-            m.map(f"{path}/veds:VehicleSeatbeltFastenedIndicator", f"{prefix}.belted", belted)
+            occupant["belted"] = fastened
+            m.map(f"{path}/veds:VehicleSeatbeltFastenedIndicator", f"{prefix}.belted", fastened)
 
-        occupant: dict[str, Any] = {"seat": seat.value}
-        if belted is not None:
-            occupant["belted"] = belted
         if seat.front_row:
             occupant["frontal_airbag"] = (frontal or AirbagState.NOT_DEPLOYED).value
         else:

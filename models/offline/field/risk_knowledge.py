@@ -49,7 +49,12 @@ from models.offline.field.risk_fit import (
     fit_spec,
     log_loss,
 )
-from models.offline.field.risk_metrics import crash_resamples, score, triage_figures
+from models.offline.field.risk_metrics import (
+    crash_resamples,
+    score,
+    target_with_margin,
+    triage_figures,
+)
 
 __all__ = [
     "MEASURED_SEED",
@@ -196,12 +201,6 @@ def _oof_of(
     return p
 
 
-def _target(requirement: float, positives: float) -> float:
-    from models.offline.field.risk_run import target_with_margin
-
-    return target_with_margin(requirement, positives)
-
-
 def knowledge_extras(
     d: RiskData,
     stage: dict[str, Any],
@@ -295,7 +294,7 @@ def knowledge_extras(
     for op, req in (("sens85", cfg.sensitivity), ("acs_cot", cfg.acs_cot_sensitivity)):
         thresholds[op] = {}
         for j, (know, (mask, q)) in enumerate(samples.items()):
-            target = _target(req, float(y[mask].sum()))
+            target = target_with_margin(req, float(y[mask].sum()))
             t = threshold_for_sensitivity(y[mask], q[mask], target)
             thresholds[op][know] = {"threshold": t, "target_sensitivity": target}
             figs: dict[str, Any] = {}
@@ -381,7 +380,7 @@ def measured_extras(
     for op, req in (("sens85", cfg.sensitivity), ("acs_cot", cfg.acs_cot_sensitivity)):
         thresholds[op] = {}
         for j, (know, (mask, q)) in enumerate(samples.items()):
-            target = _target(req, float(y[mask].sum()))
+            target = target_with_margin(req, float(y[mask].sum()))
             t = threshold_for_sensitivity(y[mask], q[mask], target)
             figs: dict[str, Any] = {}
             for name, gmask in groups.items():

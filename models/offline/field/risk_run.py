@@ -7,7 +7,6 @@ See :mod:`.risk_fit` for the method. Each stage is cached under ``--cache``
 from __future__ import annotations
 
 import hashlib
-import math
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass
 from pathlib import Path
@@ -68,6 +67,7 @@ from models.offline.field.risk_knowledge import (
 from models.offline.field.risk_metrics import (
     crash_resamples,
     score,
+    target_with_margin,
     threshold_figures,
     tier_figures,
     triage_figures,
@@ -75,7 +75,7 @@ from models.offline.field.risk_metrics import (
 from models.tiers import HIGH_RISK_THRESHOLD
 from models.units import kmh_to_mph
 
-__all__ = ["MODEL_NAME", "MODEL_VERSION", "RiskFit", "fit_risk"]
+__all__ = ["MODEL_NAME", "MODEL_VERSION", "RiskFit", "fit_risk", "target_with_margin"]
 
 MODEL_NAME: Final[str] = "field_iss15"
 #: 3.0.0 (2026-12-06): ISS 15+ fitted on NASS-CDS 1997-2014 (issue 38); the
@@ -166,20 +166,6 @@ def _legacy_probability(d: RiskData) -> FloatArray:
         )
         out[i] = model.predict(inputs).probability
     return out
-
-
-def target_with_margin(requirement: float, positives: float) -> float:
-    """Sensitivity a threshold is set for: the requirement plus one binomial standard error.
-
-    [R] The requirement (e.g. >= 0.85) must hold on held-out occupants; a
-    threshold set exactly at it on one sample misses it on another half of the
-    time. The margin is one standard error of a sensitivity over `positives`
-    occupants: those the held-out check counts (every positive of the fit, each
-    held out once). Until 2026-12-06 it was one fold's positives (a fifth:
-    a margin 2.2 times as wide, 0.864 instead of 0.856), wider than the check
-    that the requirement is stated on; the model card gives the figures at both.
-    """
-    return requirement + math.sqrt(requirement * (1.0 - requirement) / positives)
 
 
 def _inner_threshold(
