@@ -4,7 +4,7 @@ Commands::
 
     aacn-triage serve [--host H] [--port P] [--workers N]
     aacn-triage db upgrade [REV] | db downgrade REV | db current
-    aacn-triage keys create --role submitter|auditor|admin|metrics --name NAME
+    aacn-triage keys create --role submitter|auditor|admin|metrics|registry --name NAME
     aacn-triage keys list | keys revoke NAME|ID | keys rotate NAME|ID
     aacn-triage triage FILE.json
     aacn-triage triage --batch IN.jsonl|IN.parquet --out OUT.jsonl [--resume]
@@ -77,7 +77,7 @@ def build_parser() -> argparse.ArgumentParser:
     keys_sub = keys.add_subparsers(dest="keys_command", required=True)
     create = keys_sub.add_parser("create", help="create a key and print it once")
     create.add_argument(
-        "--role", required=True, choices=["submitter", "auditor", "admin", "metrics"]
+        "--role", required=True, choices=["submitter", "auditor", "admin", "metrics", "registry"]
     )
     create.add_argument("--name", required=True, help="client name, recorded with its cases")
     keys_sub.add_parser("list", help="list keys (ids, names, roles, prefixes)")
