@@ -135,6 +135,15 @@ def drift_status(
     )
 
 
+_GAUGES: Final = (
+    "aacn_drift_alarm",
+    "aacn_drift_z",
+    "aacn_drift_observed_over_predicted",
+    "aacn_drift_window_occupants",
+    "aacn_drift_false_alarm_rate",
+)
+
+
 class DriftCollector(Collector):
     """Prometheus gauges of the drift alarm, read from the store at most once a `ttl_s`.
 
@@ -161,6 +170,11 @@ class DriftCollector(Collector):
             except Exception:  # an outage: keep the last state; /readyz reports the store
                 pass
         return self._status
+
+    def describe(self) -> Iterator[Metric]:
+        """The gauges' names, without reading the store (registration calls this)."""
+        for name in _GAUGES:
+            yield GaugeMetricFamily(name, "")
 
     def collect(self) -> Iterator[Metric]:
         status = self._current()
