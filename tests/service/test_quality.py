@@ -257,3 +257,31 @@ def test_the_stated_false_alarm_rate_holds_on_a_calibrated_model() -> None:
         status = drift_status(list(y), list(p), [1.0] * 400, settings)
         fired += status.state == "alarm"
     assert 6 <= fired <= 40, fired
+
+
+def test_the_quality_page_for_the_auditor(app: ApiClient) -> None:
+    r = app.client.get("/v1/quality/report", headers=app.headers("auditor"))
+    assert r.status_code == 200, r.text
+    assert r.headers["content-security-policy"].startswith("default-src 'none'")
+    page = r.text
+    assert 'class="plot reliability"' in page
+    assert page.count('<circle class="point"') == 9  # nine linked occupants, nine groups
+    assert "Drift alarm: insufficient" in page
+    # all months: ISS 15+ are nov-1 (weight 3, not flagged), nov-3, nov-6, the child: 3 of 6
+    assert "Under-triage</td><td>50.0 % (1 of 4; 95 %" in page
+    assert "Over-triage, 1 - PPV (Cribari)</td><td>57.1 % (4 of 7; 95 %" in page
+    assert "style=" not in page  # the strict Content-Security-Policy allows no inline style
+    child = app.client.get(
+        "/v1/quality/report", params={"age_group": "child"}, headers=app.headers("admin")
+    )
+    assert child.status_code == 200
+    assert "1 cases, 1 occupants" in child.text
+    bad = app.client.get(
+        "/v1/quality/report", params={"seat_row": "9"}, headers=app.headers("auditor")
+    )
+    assert bad.status_code == 422
+    assert "Seat row must be 1, 2 or 3." in bad.text
+    for role in ("registry", "submitter"):
+        refused = app.client.get("/v1/quality/report", headers=app.headers(role))
+        assert refused.status_code == 403
+    assert app.client.get("/v1/quality/report").status_code == 401
