@@ -213,12 +213,16 @@ class DecisionQuality(BaseModel):
 
 
 class TierCounts(BaseModel):
+    """Occupants decided in one tier and the share of them linked to an outcome."""
+
     occupants: int = Field(description="Occupants decided in this tier.")
     linked: RateOut = Field(description="Share of them with an outcome linked.")
     serious: int = Field(description="Linked occupants with ISS 15+.")
 
 
 class DecileOut(BaseModel):
+    """One calibration group: its predicted range and mean against its observed share."""
+
     occupants: int = Field(description="Linked occupants in the group.")
     predicted_min: float = Field(description="Lowest decided probability in the group.")
     predicted_max: float = Field(description="Highest decided probability in the group.")
@@ -227,6 +231,8 @@ class DecileOut(BaseModel):
 
 
 class CalibrationOut(BaseModel):
+    """Predicted against observed ISS 15+ by decile, and the observed/predicted ratio."""
+
     deciles: list[DecileOut] = Field(description="Groups of equal count, lowest first.")
     mean_predicted: float | None = Field(description="(Weighted) mean decided probability.")
     observed: RateOut = Field(description="(Weighted) share with ISS 15+.")
