@@ -27,6 +27,9 @@ from service.metrics import Metrics, metrics_middleware
 from service.middleware import BodySizeLimit, ResponseHeaders
 from service.nemsis import endpoints as nemsis
 from service.openapi import document_validation_problems, install_offline_docs, operation_id
+from service.outcomes import endpoints as outcomes
+from service.outcomes.drift import DriftCollector
+from service.outcomes.quality import current_drift, drift_settings_of
 from service.pages import endpoints as pages
 from service.problems import install_problem_handlers
 from service.settings import Settings, get_settings
@@ -97,6 +100,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
             session_secret_origin=secret.origin,
         )
         app.state.ctx = ctx
+        drift = DriftCollector(lambda: current_drift(ctx.sessions, drift_settings_of(settings)))
+        metrics.registry.register(drift)
         replayer = SpoolReplayer(
             ctx.spool,
             lambda entry: cases_service.store_spooled(ctx, entry),
@@ -123,6 +128,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
             keys.stop()
             if ctx.migration is not None:
                 ctx.migration.stop()
+            metrics.registry.unregister(drift)
             db_engine.dispose()
 
     app = FastAPI(
@@ -158,6 +164,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.include_router(health.router)
     app.include_router(cases.router)
     app.include_router(nemsis.router)
+    app.include_router(outcomes.router)
     app.include_router(pages.router)
     app.mount("/static", _StaticFiles(directory=STATIC_DIR), name="static")
     return app

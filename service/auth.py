@@ -43,6 +43,7 @@ __all__ = [
     "hash_key",
     "session_key_tag",
     "require_auditor",
+    "require_registry",
     "metrics_access",
     "require_submitter",
     "revoke_api_key",
@@ -56,12 +57,15 @@ KEY_BYTES = 32
 
 
 class Role(StrEnum):
-    """Submitters POST cases, auditors read them, admins do both; metrics reads /metrics."""
+    """Submitters POST cases, auditors read them, admins do both; metrics reads /metrics;
+    registry writes outcomes of stored occupants and nothing else (a trauma registry's
+    link is not a call center: it neither submits nor reads cases)."""
 
     SUBMITTER = "submitter"
     AUDITOR = "auditor"
     ADMIN = "admin"
     METRICS = "metrics"
+    REGISTRY = "registry"
 
 
 @dataclass(frozen=True)
@@ -233,5 +237,7 @@ def _metrics_access(
 
 require_submitter = Annotated[Caller, Depends(_require(Role.SUBMITTER))]
 require_auditor = Annotated[Caller, Depends(_require(Role.AUDITOR))]
+#: Outcome writes: registry (and admin) keys.
+require_registry = Annotated[Caller, Depends(_require(Role.REGISTRY))]
 #: /metrics: open, or for metrics and admin keys (setting `metrics_access`).
 metrics_access = Annotated[None, Depends(_metrics_access)]

@@ -114,6 +114,19 @@ class Settings(BaseSettings):
         le=43_200,
         description="Lifetime of a browser session of the case pages, s (not renewed by use).",
     )
+    drift_window_occupants: int = Field(
+        default=400,
+        ge=10,
+        le=1_000_000,
+        description="The drift alarm's window: the last N linked occupants whose observed ISS "
+        "15+ are tested against the predicted (`service.outcomes.drift`).",
+    )
+    drift_false_alarm_rate: float = Field(
+        default=0.01,
+        gt=0.0,
+        lt=0.5,
+        description="The drift alarm's stated false-alarm rate per window (two-sided alpha).",
+    )
     log_level: str = Field(default="INFO", description="Python logging level.")
     docs_enabled: bool = Field(
         default=True, description="Serve /docs (bundled Swagger UI, no CDN) and /openapi.json."

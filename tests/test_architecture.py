@@ -31,6 +31,7 @@ ROUTERS = (
     "service.cases.endpoints",
     "service.pages.endpoints",
     "service.nemsis.endpoints",
+    "service.outcomes.endpoints",
     "service.health",
 )
 #: Longest module (lines) in service/ and models/triage/, longest function (lines) in

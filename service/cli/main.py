@@ -4,7 +4,7 @@ Commands::
 
     aacn-triage serve [--host H] [--port P] [--workers N]
     aacn-triage db upgrade [REV] | db downgrade REV | db current
-    aacn-triage keys create --role submitter|auditor|admin|metrics --name NAME
+    aacn-triage keys create --role submitter|auditor|admin|metrics|registry --name NAME
     aacn-triage keys list | keys revoke NAME|ID | keys rotate NAME|ID
     aacn-triage triage FILE.json
     aacn-triage triage --batch IN.jsonl|IN.parquet --out OUT.jsonl [--resume]
@@ -19,6 +19,7 @@ Commands::
                          [--workers N | --scheduler tcp://HOST:8786]
     aacn-triage cases rescore --model VERSION [--out FILE.csv] [--operating-point NAME]
     aacn-triage cases export --nemsis --out DIR [--since TIME] [--resume] [--agency-...]
+    aacn-triage outcomes import FILE.csv [--dry-run] [--by NAME]
 
 Layout: :mod:`service.cli.operate` (operator commands), :mod:`service.cli.research`
 (hand-overs to the offline tools), :mod:`service.cli.common` (shared helpers); batch
@@ -40,6 +41,7 @@ from service.cli.research import (
     cmd_simulate,
 )
 from service.nemsis import command as nemsis_command
+from service.outcomes import command as outcomes_command
 
 __all__ = ["build_parser", "main"]
 
@@ -77,7 +79,7 @@ def build_parser() -> argparse.ArgumentParser:
     keys_sub = keys.add_subparsers(dest="keys_command", required=True)
     create = keys_sub.add_parser("create", help="create a key and print it once")
     create.add_argument(
-        "--role", required=True, choices=["submitter", "auditor", "admin", "metrics"]
+        "--role", required=True, choices=["submitter", "auditor", "admin", "metrics", "registry"]
     )
     create.add_argument("--name", required=True, help="client name, recorded with its cases")
     keys_sub.add_parser("list", help="list keys (ids, names, roles, prefixes)")
@@ -148,6 +150,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     cases.set_defaults(func=cmd_cases)
     nemsis_command.add_parser(cases_sub)  # cases export --nemsis (service/nemsis/command.py)
+    outcomes_command.add_parser(sub)  # outcomes import (service/outcomes/command.py)
 
     for command, (_, text) in HANDED_OVER.items():
         handed = sub.add_parser(command, help=text, add_help=False)

@@ -19,6 +19,7 @@ from service.db.tables import (
     EndedSession,
     HealthProbe,
     IdempotencyRecord,
+    OccupantOutcome,
 )
 
 __all__ = [
@@ -26,9 +27,15 @@ __all__ = [
     "CaseRecord",
     "add_api_key",
     "add_case",
+    "add_outcome",
     "case_record",
     "case_tier",
     "count_cases",
+    "current_outcome",
+    "current_outcomes",
+    "find_case_by_event",
+    "outcome_history",
+    "quality_rows",
     "end_browser_session",
     "find_active_key",
     "get_active_key_by_id",
@@ -277,6 +284,92 @@ def case_record(session: Session, case_id: str) -> CaseRecord | None:
         source_format=case.source_format,
         source_mapping=case.source_mapping,
     )
+
+
+# ------------------------------------------------------------------ outcomes
+
+
+def find_case_by_event(session: Session, client_name: str, event_id: str) -> Case | None:
+    """The case a client stored for an event id (an event id is unique per client)."""
+    record = get_idempotency_record(session, client_name, event_id)
+    return None if record is None else session.get(Case, record.case_id)
+
+
+def current_outcome(session: Session, case_id: str, position: int) -> OccupantOutcome | None:
+    """The occupant's outcome as last written (highest revision), or None."""
+    return session.scalar(
+        select(OccupantOutcome)
+        .where(OccupantOutcome.case_id == case_id, OccupantOutcome.position == position)
+        .order_by(OccupantOutcome.revision.desc())
+        .limit(1)
+    )
+
+
+def outcome_history(session: Session, case_id: str, position: int) -> Sequence[OccupantOutcome]:
+    """Every revision of the occupant's outcome, first written first."""
+    return session.scalars(
+        select(OccupantOutcome)
+        .where(OccupantOutcome.case_id == case_id, OccupantOutcome.position == position)
+        .order_by(OccupantOutcome.revision)
+    ).all()
+
+
+def add_outcome(session: Session, outcome: OccupantOutcome) -> OccupantOutcome:
+    """Stage a revision (the unique (case, position, revision) refuses a concurrent twin)."""
+    session.add(outcome)
+    session.flush()
+    return outcome
+
+
+def current_outcomes(
+    session: Session, case_ids: Sequence[str]
+) -> dict[tuple[str, int], OccupantOutcome]:
+    """The current outcome of every occupant of these cases that has one."""
+    out: dict[tuple[str, int], OccupantOutcome] = {}
+    for start in range(0, len(case_ids), _IN_CHUNK):
+        chunk = case_ids[start : start + _IN_CHUNK]
+        latest = (
+            select(
+                OccupantOutcome.case_id,
+                OccupantOutcome.position,
+                func.max(OccupantOutcome.revision).label("revision"),
+            )
+            .where(OccupantOutcome.case_id.in_(chunk))
+            .group_by(OccupantOutcome.case_id, OccupantOutcome.position)
+            .subquery()
+        )
+        rows = session.scalars(
+            select(OccupantOutcome).join(
+                latest,
+                and_(
+                    OccupantOutcome.case_id == latest.c.case_id,
+                    OccupantOutcome.position == latest.c.position,
+                    OccupantOutcome.revision == latest.c.revision,
+                ),
+            )
+        ).all()
+        out.update({(o.case_id, o.position): o for o in rows})
+    return out
+
+
+#: Case ids per ``IN (...)`` list: well under SQLite's 32,766 bound variables.
+_IN_CHUNK = 500
+
+
+def quality_rows(
+    session: Session,
+    *,
+    received_from: datetime | None = None,
+    received_before: datetime | None = None,
+) -> Sequence[Case]:
+    """Cases (with their occupants) received in a window, oldest first: the quality figures'
+    population, linked or not."""
+    stmt = select(Case).options(selectinload(Case.occupants))
+    if received_from is not None:
+        stmt = stmt.where(Case.received_at >= received_from)
+    if received_before is not None:
+        stmt = stmt.where(Case.received_at < received_before)
+    return session.scalars(stmt.order_by(Case.received_at, Case.id)).all()
 
 
 # ---------------------------------------------------------- browser sessions

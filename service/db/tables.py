@@ -31,6 +31,7 @@ __all__ = [
     "EndedSession",
     "HealthProbe",
     "IdempotencyRecord",
+    "OccupantOutcome",
     "UTCDateTime",
 ]
 
@@ -177,3 +178,44 @@ class EndedSession(Base):
     #: SHA-256 of the session's nonce (the cookie's "n").
     session_sha256: Mapped[str] = mapped_column(String(64), primary_key=True)
     expires_at: Mapped[datetime] = mapped_column(index=True)
+
+
+class OccupantOutcome(Base):
+    """One written outcome of a stored occupant: append-only, the highest revision current.
+
+    A correction is a new row (revision + 1), never an update, so the history of every
+    occupant's outcome, and who wrote each revision and when, stays in the store
+    (``service.outcomes.service``).
+    """
+
+    __tablename__ = "occupant_outcomes"
+
+    id: Mapped[int] = mapped_column(Integer, primary_key=True, autoincrement=True)
+    case_id: Mapped[str] = mapped_column(
+        String(36), ForeignKey("cases.id", ondelete="CASCADE"), index=True
+    )
+    #: The occupant's position in the case (``case_occupants.position``) and its seat.
+    position: Mapped[int] = mapped_column(Integer)
+    seat: Mapped[str] = mapped_column(String(32))
+    #: 1 for the first outcome of the occupant, +1 per correction.
+    revision: Mapped[int] = mapped_column(Integer)
+    #: Injury Severity Score 0-75 (None: an EMS outcome without one, "not transported").
+    iss: Mapped[int | None] = mapped_column(Integer)
+    #: Maximum AIS 0-6, where known.
+    mais: Mapped[int | None] = mapped_column(Integer)
+    died: Mapped[bool | None] = mapped_column(Boolean)
+    disposition: Mapped[str | None] = mapped_column(String(32))
+    source: Mapped[str] = mapped_column(String(32))
+    #: When the source recorded the outcome.
+    recorded_at: Mapped[datetime]
+    #: Survey weight of the occupant in the figures (1 unless a registry extract says).
+    weight: Mapped[float] = mapped_column(Float)
+    #: Who wrote this revision: the API key's name, or the import command's account.
+    written_by: Mapped[str] = mapped_column(String(200))
+    written_at: Mapped[datetime]
+    #: ``api`` or ``import``.
+    channel: Mapped[str] = mapped_column(String(16))
+    #: SHA-256 of the outcome's content, so that a write of the same content is a replay.
+    content_sha256: Mapped[str] = mapped_column(String(64))
+
+    __table_args__ = (UniqueConstraint("case_id", "position", "revision"),)

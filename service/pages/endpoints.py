@@ -2,6 +2,7 @@
 
 - ``GET /v1/cases/{case_id}/report``: the case page (auditor or admin).
 - ``GET /v1/reports``: recent cases with the filters of ``GET /v1/cases``.
+- ``GET /v1/quality/report``: triage quality against linked outcomes (``GET /v1/quality``).
 - ``GET /v1/session``: the sign-in form; ``POST /v1/session``: sign in with an API
   key (sets the session cookie); ``POST /v1/session/logout``: sign out.
 
@@ -40,7 +41,9 @@ from service.cases import service as cases_service
 from service.context import ServiceContext
 from service.db.repository import CaseFilters
 from service.deps import ContextDep
+from service.outcomes.quality import AGE_GROUPS, CRASH_MODES, drift_settings_of, quality_report
 from service.pages import views as report
+from service.pages.quality_page import filters_from_query, quality_context
 from service.pages.session import (
     COOKIE_PATH,
     LOGIN_CSRF_COOKIE,
@@ -297,6 +300,39 @@ def case_list(request: Request, ctx: ContextDep) -> Response:
         max_limit=settings.page_max_limit,
         message=message,
         next_url=next_url,
+        **_chrome(request, ctx, gate),
+    )
+    return _html(body, 422 if message else 200, started=started)
+
+
+@router.get("/v1/quality/report", response_class=HTMLResponse)
+def quality_page(request: Request, ctx: ContextDep) -> Response:
+    """Triage quality against linked outcomes, with the filters of ``GET /v1/quality``."""
+    started = time.perf_counter()
+    gate = _gate(request, ctx)
+    if isinstance(gate, Response):
+        return gate
+    q = request.query_params
+    echo = {
+        k: q.get(k, "")
+        for k in ("crash_mode", "age_group", "seat_row", "received_from", "received_before")
+    }
+    message = ""
+    context: dict[str, Any] = {"overall": None, "drift": None, "targets": {}}
+    try:
+        filters = filters_from_query(echo, _when)
+        found = quality_report(ctx.sessions, filters, drift=drift_settings_of(ctx.settings))
+        context = quality_context(found)
+    except ValueError as exc:
+        message = str(exc)
+    context.setdefault("crash_modes", CRASH_MODES)
+    context.setdefault("age_groups", AGE_GROUPS)
+    context.setdefault("targets", {})
+    body = report.render(
+        "quality.html",
+        filters=echo,
+        message=message,
+        **context,
         **_chrome(request, ctx, gate),
     )
     return _html(body, 422 if message else 200, started=started)

@@ -14,7 +14,14 @@ from service.db import migrate
 from service.db.session import make_engine
 from service.db.tables import Base
 
-TABLES = {"api_keys", "cases", "case_occupants", "idempotency_records", "health_probe"}
+TABLES = {
+    "api_keys",
+    "cases",
+    "case_occupants",
+    "idempotency_records",
+    "health_probe",
+    "occupant_outcomes",
+}
 
 
 @pytest.fixture(params=["sqlite", pytest.param("postgres", marks=pytest.mark.postgres)])

@@ -543,8 +543,14 @@ def test_the_json_api_and_its_openapi_document_are_unchanged(api: ApiClient) -> 
     assert r.json()["case_id"] == case_id
     assert_problem(api.client.get(f"/v1/cases/{case_id}", headers=html), 401)
     paths = set(api.client.get("/openapi.json").json()["paths"])
-    # the pages stay out of the document; the NEMSIS record (issue 40) is an API resource
-    assert paths == {"/v1/cases", "/v1/cases/{case_id}", "/v1/cases/{case_id}/nemsis"}
+    # the pages stay out of the document; the NEMSIS record and the outcomes are API resources
+    assert paths == {
+        "/v1/cases",
+        "/v1/cases/{case_id}",
+        "/v1/cases/{case_id}/nemsis",
+        "/v1/cases/{case_id}/occupants/{seat}/outcome",
+        "/v1/quality",
+    }
 
 
 # ---------------------------------------------------------------- the list
