@@ -41,6 +41,7 @@ class AssumptionCode(StrEnum):
     DELTA_V_READ_AS_RECONSTRUCTED = "delta_v_read_as_reconstructed"
     BELT_UNKNOWN = "belt_unknown"
     CHILD_WITHOUT_OCCUPANT_MODEL = "child_without_occupant_model"
+    CHILD_REGION_RISK_EXTRAPOLATED = "child_region_risk_extrapolated"
     OUTSIDE_OCCUPANT_MODEL_COVERAGE = "outside_occupant_model_coverage"
     OCCUPANT_MODEL_FAILED = "occupant_model_failed"
     POSTURE_NOT_SENSED = "posture_not_sensed"
@@ -156,6 +157,11 @@ DESCRIPTIONS: Final[dict[AssumptionCode, str]] = {
         "A child (under 16 years, or in a child seat): the occupant models are adult dummies, "
         "so no occupant-model explanation is given; the field risk model, fitted on children "
         "too, decides."
+    ),
+    AssumptionCode.CHILD_REGION_RISK_EXTRAPOLATED: (
+        "A child: the decision (ISS 15+) is fitted on children too, but the body-region risks "
+        "are the adults' models' (the field model's region models were fitted on adults), "
+        "extrapolated."
     ),
     AssumptionCode.OUTSIDE_OCCUPANT_MODEL_COVERAGE: (
         "The PDOF lies between the occupant models' ranges: the field model decides without "

@@ -135,7 +135,8 @@ _ARTIFACT_FILE: Final[str] = "field_iss15.json"
 #: operating points keep their promise for each (:meth:`RiskModel.threshold`).
 KNOWLEDGE: Final[tuple[str, ...]] = ("adult", "child", "age_unknown")
 
-#: The same with a measured delta-V (artifacts with a measurement model, 3.4.0 on).
+#: The same with a measured delta-V (read as the reconstruction it stands for,
+#: :mod:`models.field.measurement`; decided at the same threshold).
 KNOWLEDGE_MEASURED: Final[tuple[str, ...]] = tuple(f"{k}_measured" for k in KNOWLEDGE)
 
 
@@ -508,12 +509,12 @@ class RiskModel:
         integrated over (None: older sets impute medians).
     knowledge_thresholds : Mapping[str, Mapping[str, float]]
         Feature set 3: per operating point, the threshold by what was known
-        (``adult``, ``child``, ``age_unknown``, and each ``_measured`` where
-        the artifact has a measurement model); empty for older artifacts,
-        whose one threshold applies to every occupant.
+        (``adult``, ``child``, ``age_unknown``; a measured delta-V takes the
+        same); empty for older artifacts, whose one threshold applies to every
+        occupant.
     measurement : MeasurementModel or None
         The delta-V measurement model a measured delta-V is read through
-        (:mod:`models.field.measurement`; 3.4.0 on). None: every delta-V is
+        (:mod:`models.field.measurement`; 3.3.0 on). None: every delta-V is
         taken as reconstructed, as the data's (older artifacts).
     """
 
@@ -673,8 +674,7 @@ class RiskModel:
                 raise ArtifactError(str(exc)) from None
             for n, op in points.items():
                 table = {str(k): float(v) for k, v in _get(op, "thresholds_by_knowledge").items()}
-                keys = set(KNOWLEDGE) | (set(KNOWLEDGE_MEASURED) if measurement else set())
-                if set(table) != keys or not all(0 < t < 1 for t in table.values()):
+                if set(table) != set(KNOWLEDGE) or not all(0 < t < 1 for t in table.values()):
                     raise ArtifactError(f"operating point {n!r}: thresholds by knowledge malformed")
                 by_knowledge[str(n)] = table
         model = _get(doc, "model")
@@ -957,7 +957,8 @@ class RiskModel:
         """
         name = operating_point or self.default_operating_point
         if knowledge is not None and name in self.knowledge_thresholds:
-            return self.knowledge_thresholds[name][knowledge]
+            # a measured delta-V is read as the reconstruction it stands for: the same threshold
+            return self.knowledge_thresholds[name][knowledge.removesuffix("_measured")]
         return self.thresholds[name]
 
 

@@ -370,6 +370,15 @@ def _risk_assumptions(
             )
         )
     covers_children = model.donors is not None
+    if covers_children and occupant.child and "regions_from" in model.document:
+        out.append(
+            Assumption(
+                AssumptionCode.CHILD_REGION_RISK_EXTRAPOLATED,
+                f"{who}: a child: the region risks are the adults' models' "
+                f"({model.document['regions_from']['version']}), extrapolated",
+                index,
+            )
+        )
     if occupant.age_years is not None and occupant.age_years < 16.0 and not covers_children:
         out.append(
             Assumption(

@@ -29,24 +29,29 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
     "received_at": "2026-11-23T08:15:31Z",
     "triage": {
         "iss15_plus": True,
-        "probability": 0.07953,
-        "probability_ci95": [0.05356, 0.1165],
-        "threshold": 0.01771,
-        "recommendation": MODERATE_WORDS,
+        "probability": 0.03033,
+        "probability_ci95": [0.02493, 0.03687],
+        "threshold": 0.01798,
+        "recommendation": "Vehicle telemetry consistent with severe injury (2021 "
+        "guideline, moderate risk): consider a trauma center, which need "
+        "not be the highest level; EMS judgment and local protocol "
+        "decide.",
         "outcome": "ISS15+",
-        "model": "field_iss15@3.2.0",
+        "model": "field_iss15@3.3.0",
         "operating_point": "sens85",
+        "unknown_inputs_range95": [0.01871, 0.04764],
+        "knowledge": "adult_measured",
         "tier": "moderate",
         "high_threshold": 0.2,
     },
     "vehicle": {
-        "probability": 0.07953,
-        "probability_ci95": [0.05298, 0.1154],
-        "heldout_auc": 0.8916,
+        "probability": 0.03033,
+        "probability_ci95": [0.02425, 0.03674],
+        "heldout_auc": 0.8891,
         "outcome": "anyone ISS15+",
-        "model": "field_iss15@3.2.0",
+        "model": "field_iss15@3.3.0",
         "tier": "moderate",
-        "threshold": 0.01771,
+        "threshold": 0.01669,
         "high_threshold": 0.2,
     },
     "occupants": [
@@ -93,55 +98,60 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
             },
             "region_risk": {
                 "head": {
-                    "probability": 0.02464,
-                    "probability_ci95": [0.01757, 0.03444],
+                    "probability": 0.01012,
+                    "probability_ci95": [0.006843, 0.01496],
                     "ais_level": 3,
                 },
                 "face": {
-                    "probability": 0.01259,
-                    "probability_ci95": [0.008044, 0.01966],
+                    "probability": 0.006805,
+                    "probability_ci95": [0.005197, 0.008905],
                     "ais_level": 2,
                 },
                 "neck": {
-                    "probability": 0.001079,
-                    "probability_ci95": [0.0005544, 0.002101],
+                    "probability": 0.0003542,
+                    "probability_ci95": [0.0001936, 0.0006479],
                     "ais_level": 2,
                 },
                 "thorax": {
-                    "probability": 0.07707,
-                    "probability_ci95": [0.0545, 0.1079],
+                    "probability": 0.03487,
+                    "probability_ci95": [0.02467, 0.04907],
                     "ais_level": 3,
                 },
                 "abdomen": {
-                    "probability": 0.01561,
-                    "probability_ci95": [0.008834, 0.02744],
+                    "probability": 0.005268,
+                    "probability_ci95": [0.003638, 0.007621],
                     "ais_level": 3,
                 },
                 "spine": {
-                    "probability": 0.009204,
-                    "probability_ci95": [0.006048, 0.01398],
+                    "probability": 0.004363,
+                    "probability_ci95": [0.002911, 0.006536],
                     "ais_level": 3,
                 },
                 "upper_extremity": {
-                    "probability": 0.01549,
-                    "probability_ci95": [0.008799, 0.02715],
+                    "probability": 0.008707,
+                    "probability_ci95": [0.005115, 0.01478],
                     "ais_level": 3,
                 },
                 "lower_extremity": {
-                    "probability": 0.03214,
-                    "probability_ci95": [0.01983, 0.05168],
+                    "probability": 0.01992,
+                    "probability_ci95": [0.01209, 0.03265],
                     "ais_level": 3,
                 },
             },
             "triage": {
                 "iss15_plus": True,
-                "probability": 0.07953,
-                "probability_ci95": [0.05356, 0.1165],
-                "threshold": 0.01771,
-                "recommendation": MODERATE_WORDS,
+                "probability": 0.03033,
+                "probability_ci95": [0.02493, 0.03687],
+                "threshold": 0.01798,
+                "recommendation": "Vehicle telemetry consistent with severe injury "
+                "(2021 guideline, moderate risk): consider a "
+                "trauma center, which need not be the highest "
+                "level; EMS judgment and local protocol decide.",
                 "outcome": "ISS15+",
-                "model": "field_iss15@3.2.0",
+                "model": "field_iss15@3.3.0",
                 "operating_point": "sens85",
+                "unknown_inputs_range95": [0.01871, 0.04764],
+                "knowledge": "adult_measured",
                 "tier": "moderate",
                 "high_threshold": 0.2,
             },
@@ -156,6 +166,8 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
                 "outcome": "ISS15+",
                 "model": "occupant_models",
                 "operating_point": None,
+                "unknown_inputs_range95": None,
+                "knowledge": None,
                 "tier": None,
                 "high_threshold": None,
             },
@@ -164,10 +176,16 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
                 "probability": 0.4722,
                 "probability_ci95": [0.2666, 0.6876],
                 "threshold": 0.042,
-                "recommendation": MODERATE_WORDS,
+                "recommendation": "Vehicle telemetry consistent with severe "
+                "injury (2021 guideline, moderate risk): "
+                "consider a trauma center, which need not be "
+                "the highest level; EMS judgment and local "
+                "protocol decide.",
                 "outcome": "police_A+K",
                 "model": "nass_logistic",
                 "operating_point": None,
+                "unknown_inputs_range95": None,
+                "knowledge": None,
                 "tier": None,
                 "high_threshold": None,
             },
@@ -181,24 +199,29 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         "peak_accel_g": 31.72,
         "duration_ms": 100.0,
         "haversine": {"amplitude_g": 31.72, "duration_ms": 100.0, "r_squared": 1.0},
+        "delta_v_source": "measured",
     },
     "assumptions": [
-        {
-            "code": "stature_mass_imputed",
-            "message": "occupants[0]: stature unknown: the field risk models use their "
-            "data's median, 170 cm",
-            "occupant": 0,
-        },
-        {
-            "code": "stature_mass_imputed",
-            "message": "occupants[0]: mass unknown: the field risk models use their "
-            "data's median, 75 kg",
-            "occupant": 0,
-        },
         {
             "code": "model_year_imputed",
             "message": "occupants[0]: vehicle model year unknown: the field risk models "
             "use 2010 (their latest accident year's median)",
+            "occupant": 0,
+        },
+        {
+            "code": "delta_v_measured",
+            "message": "occupants[0]: delta-V measured by the vehicle (56.0 km/h): the "
+            "field risk models learned reconstructed delta-V, which reads "
+            "lower; the probability is the average over the reconstructed "
+            "delta-V the measurement model (delta_v_measurement@1.1.0) gives "
+            "for it",
+            "occupant": 0,
+        },
+        {
+            "code": "inputs_integrated",
+            "message": "occupants[0]: stature, mass unknown: the probability is the "
+            "average over such occupants of this seat in the field data (the "
+            "spread over them 0.0187-0.0476, in `unknown_inputs_range95`)",
             "occupant": 0,
         },
     ],
@@ -209,8 +232,12 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
             "sha256": "b670eb94214f8538cb2bf5a286f617204aec2c091e667622dc418cd6b1ac7710",
         },
         "field_model": {
-            "version": "3.2.0",
-            "sha256": "73d837f4e2ca842bddc1d298eb24fe52ca5a2be9b05ffcffc9aceb24c9c548fc",
+            "version": "3.3.0",
+            "sha256": "d0bbc0c00f968dcec257423378436b9984462dabb66692e980570e399f302213",
+        },
+        "delta_v_measurement": {
+            "version": "1.1.0",
+            "sha256": "28c3d2a763d8007073d5e4e0c5e8fc06ee11da60f40b34d4b4f16ac443522ff1",
         },
         "lpm_parameters:compact_sedan": {
             "version": "compact_sedan",
@@ -222,7 +249,7 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         },
         "triage_code": {
             "version": "0.2.0",
-            "sha256": "c44df47e282617ff849023a62d7951c7f27bdc7ee3ef5e7fae31e277567e9975",
+            "sha256": "cd4ff2db21254f3ed94c43813543c59aa8e14cfd2e244efcab9d1882b31bd621",
         },
         "risk_calibration": {
             "version": "1",
@@ -237,12 +264,7 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
             "sha256": "41f3094230e1b62c3af58ff6f138d5bcaace00ec3c3b74b66d8a53bd6e5365cd",
         },
     },
-    "timings_ms": {
-        "pulse": 0.179,
-        "occupants": 21.25,
-        "field_model": 1.327,
-        "engine_total": 21.43,
-    },
+    "timings_ms": {"pulse": 0.179, "occupants": 21.25, "field_model": 1.327, "engine_total": 21.43},
     "stored": True,
     "spooled": False,
 }

@@ -15,10 +15,8 @@ backward pass scores a group by the log loss over every occupant, of whom
 children are a ninth with a sixteenth of the positives, so it may drop terms
 that only children need (their age enters no other column: set 1 clamps every
 age below 16 to 16). Each fold's model is fitted once and scores its held-out
-occupants four ways: as sent, with age, sex, stature and mass unknown
-(integrated, :mod:`models.field.unknowns`), and with the delta-V as a vehicle
-would have measured it, with and without those inputs
-(:mod:`models.field.measurement`). The operating points' held-out figures take
+occupants two ways: as sent, and with age, sex, stature and mass unknown
+(integrated, :mod:`models.field.unknowns`). The operating points' held-out figures take
 each fold's threshold from the other folds' held-out predictions (the whole
 fit refits inside each training part; the card names the method).
 """
@@ -33,7 +31,6 @@ import numpy as np
 from tqdm import tqdm
 
 from models.arrays import FloatArray, IntArray
-from models.field.measurement import simulated_measured_kmh
 from models.field.risk_children import CHILD_GROUPS
 from models.field.versions import artifact_for_version
 from models.offline.field.risk_fit import (
@@ -49,12 +46,9 @@ from models.offline.field.risk_fit import (
     temporal_probability,
 )
 from models.offline.field.risk_knowledge import (
-    MEASURED_SEED,
-    SENSED_UNKNOWN,
     donor_table_of,
     integrated_probability,
     knowledge_extras,
-    measured_extras,
 )
 from models.offline.field.risk_metrics import crash_resamples, score
 from models.offline.field.risk_run import (
@@ -86,21 +80,14 @@ def _fold_predictions(
     folds: list[tuple[IntArray, IntArray]],
     cfg: RiskConfig,
 ) -> dict[str, FloatArray]:
-    """Held-out P four ways, each fold's model fitted once (module docstring)."""
-    rng = np.random.default_rng(MEASURED_SEED)
-    measured = simulated_measured_kmh(np.asarray(d.arrays["delta_v_kmh"]), d.year, rng)
-    out = {k: np.empty(y.size) for k in ("oof", "sensed_only", "measured", "measured_sensed")}
+    """Held-out P two ways, each fold's model fitted once (module docstring)."""
+    out = {k: np.empty(y.size) for k in ("oof", "sensed_only")}
     for tr, te in tqdm(folds, desc="decision: folds by crash", leave=False):
         f = fit_spec(d, y, tr, spec, cfg)
         year = float(d.year[tr].max())
         out["oof"][te] = f.probability(served_x(d, te, year))
         table = donor_table_of(d, tr)
         out["sensed_only"][te] = integrated_probability(f, d, te, table, year)
-        out["measured"][te] = integrated_probability(f, d, te, table, year, (), measured[te])
-        out["measured_sensed"][te] = integrated_probability(
-            f, d, te, table, year, SENSED_UNKNOWN, measured[te]
-        )
-    out["measured_kmh"] = measured
     return out
 
 
@@ -155,12 +142,6 @@ def fit_decision(config: RiskConfig, cache_dir: Path | None, regions_from: str) 
         "decision_knowledge",
         lambda: knowledge_extras(d, stage, folds, cfg, PLAIN_COLUMNS, preds["sensed_only"]),
     )
-    measured = {
-        "age_sent": preds["measured"],
-        "sensed_only": preds["measured_sensed"],
-        "measured_kmh": preds["measured_kmh"],
-    }
-    figures["measured"] = cache.get("decision_measured", lambda: measured_extras(d, cfg, measured))
     old = _old_document(regions_from)
     carried = {k: v for k, v in old["outcomes"].items() if k != "iss15"}
     doc = _document(d, cfg, drift, drift_table, {"iss15": stage}, figures, {}, carried=carried)
@@ -176,10 +157,6 @@ def fit_decision(config: RiskConfig, cache_dir: Path | None, regions_from: str) 
     doc.pop("content_sha256", None)
     doc["content_sha256"] = canonical_content_sha256(doc)
     oof = {"iss15": p, "iss15_sensed_only": preds["sensed_only"]}
-    oof |= {
-        "iss15_measured": preds["measured"],
-        "iss15_measured_sensed_only": measured["sensed_only"],
-    }
     return RiskFit(artifact=doc, figures=figures, oof=oof, data=d)
 
 

@@ -31,7 +31,7 @@ import numpy as np
 from tqdm import tqdm
 
 from models.arrays import FloatArray, IntArray
-from models.field.measurement import over_reconstructed_nodes, simulated_measured_kmh
+from models.field.measurement import over_reconstructed_nodes
 from models.field.risk_children import (
     ALL_COLUMNS_3,
     CHILD_GROUPS,
@@ -57,12 +57,10 @@ from models.offline.field.risk_metrics import (
 )
 
 __all__ = [
-    "MEASURED_SEED",
     "SENSED_UNKNOWN",
     "donor_table_of",
     "integrated_oof",
     "knowledge_extras",
-    "measured_oof",
 ]
 
 #: What a telematics unit does not sense of an occupant (integrated over).
@@ -150,37 +148,6 @@ def integrated_oof(
         f = fit_spec(d, y, tr, spec, config)
         p[te] = integrated_probability(f, d, te, donor_table_of(d, tr), float(d.year[tr].max()))
     return p
-
-
-#: Seed of the simulated measurements (the consistency check of measured delta-V).
-MEASURED_SEED: Final[int] = 20261207
-
-
-def measured_oof(
-    d: RiskData,
-    y: FloatArray,
-    spec: Spec,
-    folds: Sequence[tuple[IntArray, IntArray]],
-    config: RiskConfig,
-) -> dict[str, FloatArray]:
-    """Held-out P with each occupant's delta-V as a vehicle would have measured it.
-
-    Each row's measured delta-V is drawn from the measurement model
-    (:func:`models.field.measurement.simulated_measured_kmh`, its own accident
-    year's era, seeded) and read back through the model as served, once with
-    the occupant inputs sent (``age_sent``) and once with age, sex, stature and
-    mass unknown (``sensed_only``). Returns both, each shape (n,), and the
-    simulated ``measured_kmh``.
-    """
-    rng = np.random.default_rng(MEASURED_SEED)
-    measured = simulated_measured_kmh(np.asarray(d.arrays["delta_v_kmh"]), d.year, rng)
-    sent, sensed = np.empty(y.size), np.empty(y.size)
-    for tr, te in tqdm(folds, desc="measured delta-V, read back", leave=False):
-        f = fit_spec(d, y, tr, spec, config)
-        table, year = donor_table_of(d, tr), float(d.year[tr].max())
-        sent[te] = integrated_probability(f, d, te, table, year, (), measured[te])
-        sensed[te] = integrated_probability(f, d, te, table, year, SENSED_UNKNOWN, measured[te])
-    return {"age_sent": sent, "sensed_only": sensed, "measured_kmh": measured}
 
 
 def _restricted(
@@ -322,75 +289,4 @@ def _local(ix: IntArray, mask: np.ndarray) -> IntArray:
     """Global row indices of a resample as positions within the rows of `mask`."""
     pos = np.cumsum(mask) - 1
     out: IntArray = pos[ix]
-    return out
-
-
-def _groups(d: RiskData) -> dict[str, np.ndarray]:
-    age = np.asarray(d.arrays["age_years"], dtype=np.float64)
-    child = age < CHILD_MAX_AGE_YEARS
-    adult = ~child
-    restraint = np.asarray(d.arrays["restraint"], dtype=object)
-    return {
-        "children": child,
-        "children 0-4": child & (age < 5),
-        "children 5-9": child & (age >= 5) & (age < 10),
-        "children 10-15": child & (age >= 10),
-        "children in a child seat": child & (restraint == "child_seat"),
-        "adults": adult,
-        "adults 16-44": adult & (age < 45),
-        "adults 45-64": adult & (age >= 45) & (age < 65),
-        "adults 65+": adult & (age >= 65),
-    }
-
-
-def measured_extras(
-    d: RiskData, cfg: RiskConfig, measured: dict[str, FloatArray]
-) -> dict[str, Any]:
-    """Figures and thresholds for a measured delta-V (:func:`measured_oof`), as
-    :func:`knowledge_extras` gives them for the reconstructed one: per group ``age_sent``
-    and ``sensed_only`` scores, and ``thresholds_by_knowledge`` for ``adult_measured``,
-    ``child_measured`` and ``age_unknown_measured``. A consistency check: the figures
-    pass through the measurement model they check."""
-    y, w = d.outcomes[0].y, d.w
-    groups = _groups(d)
-    child, adult = groups["children"], groups["adults"]
-
-    def res(mask: np.ndarray, seed: int) -> list[IntArray]:
-        idx = np.flatnonzero(mask)
-        return [
-            _local(idx[r], mask)
-            for r in crash_resamples(d.crash[idx], cfg.n_metric_bootstrap, seed)
-        ]
-
-    sent, sensed = measured["age_sent"], measured["sensed_only"]
-    out: dict[str, Any] = {"age_sent": {}, "sensed_only": {}}
-    for k, (name, mask) in enumerate(groups.items()):
-        if not mask.any() or y[mask].sum() == 0:
-            continue
-        r = res(mask, 131 + k)
-        out["age_sent"][name] = score(y[mask], sent[mask], w[mask], r)
-        out["sensed_only"][name] = score(y[mask], sensed[mask], w[mask], r)
-    everyone = np.ones_like(child)
-    samples = {
-        "adult_measured": (adult, sent),
-        "child_measured": (child, sent),
-        "age_unknown_measured": (everyone, sensed),
-    }
-    thresholds: dict[str, dict[str, Any]] = {}
-    for op, req in (("sens85", cfg.sensitivity), ("acs_cot", cfg.acs_cot_sensitivity)):
-        thresholds[op] = {}
-        for j, (know, (mask, q)) in enumerate(samples.items()):
-            target = target_with_margin(req, float(y[mask].sum()))
-            t = threshold_for_sensitivity(y[mask], q[mask], target)
-            figs: dict[str, Any] = {}
-            for name, gmask in groups.items():
-                sel = gmask & mask
-                if sel.any() and y[sel].sum() > 0:
-                    figs[name] = triage_figures(y[sel], q[sel] >= t, w[sel], res(sel, 161 + j))
-            if know == "age_unknown_measured":
-                figs["everyone"] = triage_figures(y, q >= t, w, res(everyone, 171))
-            thresholds[op][know] = {"threshold": t, "target_sensitivity": target, "figures": figs}
-    out["thresholds_by_knowledge"] = thresholds
-    m, r0 = measured["measured_kmh"], np.asarray(d.arrays["delta_v_kmh"])
-    out["measured_over_reconstructed_weighted"] = float(np.average(m / r0, weights=w))
     return out

@@ -20,7 +20,6 @@ from models.offline.field.published import NHTSA_ALL
 from models.offline.field.risk_report_knowledge import (
     knowledge_acceptance,
     knowledge_lines,
-    measured_acceptance,
     measured_lines,
 )
 from models.offline.field.risk_run import RiskFit
@@ -637,7 +636,13 @@ def _card(doc: dict[str, Any]) -> str:
         "## Fleet drift: the latest years held out",
         *_temporal(doc),
         "",
-        "## Operating points (held out: thresholds chosen inside each training part)",
+        (
+            "## Operating points (held out: each fold's threshold set on the other folds' "
+            "held-out predictions)"
+            if doc["operating_points"]["sens85"]["figures"].get("threshold_method")
+            == "other_folds_heldout"
+            else "## Operating points (held out: thresholds chosen inside each training part)"
+        ),
         *_operating_points(doc),
         "",
         f"![risk curves]({PLOTS['curves']})",
@@ -654,6 +659,17 @@ def _card(doc: dict[str, Any]) -> str:
         "",
         *_knowledge(doc),
         "## Region risk",
+        *(
+            [
+                f"The region models are those of {doc['regions_from']['version']} as they are "
+                "(a decision-only refit, `fit-field --regions-from`): fitted on "
+                f"{doc['regions_from']['rows']:,} adult occupants; a child's region risks are "
+                "the adults' models' (extrapolated). Their figures are that fit's.",
+                "",
+            ]
+            if "regions_from" in doc
+            else []
+        ),
         *_regions(doc),
         "",
         f"![regions]({PLOTS['regions']})",
@@ -666,10 +682,7 @@ def _card(doc: dict[str, Any]) -> str:
             f"| {a} | {'yes' if ok else '**no**'} | {fig} |"
             for a, ok, fig in (knowledge_acceptance(doc) if "unknowns" in doc else [])
         ],
-        *[
-            f"| {a} | {'yes' if ok else '**no**'} | {fig} |"
-            for a, ok, fig in (measured_acceptance(doc) if "measurement_model" in doc else [])
-        ],
+
         "",
         "## Limits",
         (

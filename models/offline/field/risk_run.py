@@ -22,6 +22,7 @@ from models.field.measurement import (
     EARLY_ERA_SHARE,
     ERA_RATIOS,
     LATE_ERA_FIRST_YEAR,
+    MEASURED_TOLERANCE_SD,
     MEASUREMENT_MODEL,
     QUADRATURE_POINTS,
     SD_KMH,
@@ -61,8 +62,6 @@ from models.offline.field.risk_knowledge import (
     donor_table_of,
     integrated_oof,
     knowledge_extras,
-    measured_extras,
-    measured_oof,
 )
 from models.offline.field.risk_metrics import (
     crash_resamples,
@@ -407,17 +406,11 @@ def fit_risk(config: RiskConfig | None = None, cache_dir: Path | None = None) ->
         "knowledge",
         lambda: knowledge_extras(d, stages["iss15"], folds, cfg, PLAIN_COLUMNS, integrated),
     )
-    measured = cache.get(
-        "measured_oof", lambda: measured_oof(d, iss.y, stages["iss15"]["spec"], folds, cfg)
-    )
-    figures["measured"] = cache.get("measured", lambda: measured_extras(d, cfg, measured))
     specs = {n: s["spec"] for n, s in stages.items()}
     boot = _bootstrap_refits(d, specs, cfg, cache)
     doc = _document(d, cfg, drift, drift_table, stages, figures, boot)
     oof = {n: s["oof"] for n, s in stages.items()} | {
         "iss15_sensed_only": integrated,
-        "iss15_measured": measured["age_sent"],
-        "iss15_measured_sensed_only": measured["sensed_only"],
     }
     return RiskFit(artifact=doc, figures=figures, oof=oof, data=d)
 
@@ -643,8 +636,7 @@ def _document(
             "threshold": pt["threshold"],
             "thresholds_by_knowledge": {
                 k: v["threshold"]
-                for part in ("knowledge", "measured")
-                for k, v in extras[part]["thresholds_by_knowledge"][name].items()
+                for k, v in extras["knowledge"]["thresholds_by_knowledge"][name].items()
             },
             "figures": _round({k: v for k, v in pt.items() if k != "threshold"}),
         }
@@ -690,8 +682,8 @@ def _document(
             "late_era_first_year": LATE_ERA_FIRST_YEAR,
             "early_era_share": EARLY_ERA_SHARE,
             "sd_kmh": SD_KMH,
+            "measured_tolerance_sd": MEASURED_TOLERANCE_SD,
             "quadrature_points": QUADRATURE_POINTS,
-            "figures": _round(extras["measured"]),
         },
         "default_operating_point": "sens85",
         "tiers": _round(extras["tiers"]),

@@ -130,3 +130,31 @@ def test_integration_is_deterministic(model: RiskModel) -> None:
     assert a.probability == b.probability
     assert a.ci95 == b.ci95
     assert a.unknown_inputs_range95 == b.unknown_inputs_range95
+
+
+def test_a_measured_delta_v_reads_lower_and_widens_the_spread(model: RiskModel) -> None:
+    """Read as the reconstruction it stands for (about 0.78 times), a measured delta-V
+    answers below the same number taken as reconstructed; the measurement model's spread
+    shows in `unknown_inputs_range95` (none when every input is known and the delta-V is
+    reconstructed)."""
+    from models.field.measurement import DeltaVSource, SourcedRiskInputs
+
+    def sourced(source: DeltaVSource, **kw: object) -> SourcedRiskInputs:
+        base = dataclasses.asdict(_adult(**kw))
+        return SourcedRiskInputs(**{**base, "delta_v_source": source})
+
+    assert model.measurement is not None
+    rec = model.predict(sourced(DeltaVSource.RECONSTRUCTED))
+    mea = model.predict(sourced(DeltaVSource.MEASURED))
+    assert rec.unknown_inputs_range95 is None
+    assert mea.integrated == ("delta_v_kmh",)
+    assert mea.knowledge == "adult_measured"
+    assert mea.probability < rec.probability
+    assert mea.unknown_inputs_range95 is not None
+    unknown = {"age_years": None, "female": None, "stature_cm": None, "mass_kg": None}
+    rec_u = model.predict(sourced(DeltaVSource.RECONSTRUCTED, **unknown))
+    mea_u = model.predict(sourced(DeltaVSource.MEASURED, **unknown))
+    assert rec_u.unknown_inputs_range95 is not None
+    assert mea_u.unknown_inputs_range95 is not None
+    assert mea_u.integrated == (*rec_u.integrated, "delta_v_kmh")
+    assert model.threshold("sens85", "adult_measured") == model.threshold("sens85", "adult")

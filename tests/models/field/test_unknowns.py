@@ -177,3 +177,33 @@ def test_substitute_expands_only_the_unknown_inputs() -> None:
     belted = [float(t.restraint[j] != "none") for j in donors]
     assert out["belted"][1:].tolist() == belted  # type: ignore[union-attr]
     assert out["seat_side"] == ["left"] + ["right"] * donors.size
+
+
+def test_a_measured_delta_v_stands_for_a_smaller_reconstruction() -> None:
+    """The measurement model's nodes: weights summing to one, centred on the era-weighted
+    ratio times the measurement (Niehoff & Gabler's 23 %, the reference's 19 %), within the
+    measurement's own tolerance; every node a positive delta-V."""
+    from models.field.measurement import (
+        EARLY_ERA_SHARE,
+        ERA_RATIOS,
+        MEASURED_TOLERANCE_SD,
+        over_reconstructed_nodes,
+        reconstructed_nodes,
+    )
+
+    values, weights = reconstructed_nodes(50.0)
+    assert weights.sum() == pytest.approx(1.0)
+    mean_ratio = EARLY_ERA_SHARE * ERA_RATIOS[0] + (1 - EARLY_ERA_SHARE) * ERA_RATIOS[1]
+    assert float(values @ weights) == pytest.approx(50.0 * mean_ratio, rel=1e-12)
+    assert values.min() > 50.0 * ERA_RATIOS[0] * (1 - 3 * MEASURED_TOLERANCE_SD)
+    assert values.max() < 50.0 * ERA_RATIOS[1] * (1 + 3 * MEASURED_TOLERANCE_SD)
+    assert np.all(reconstructed_nodes(0.5)[0] >= 1.0)
+    arrays = {"delta_v_kmh": np.array([30.0, 50.0]), "restraint": ["belted", "none"]}
+    out, owner, w = over_reconstructed_nodes(
+        arrays, np.array([0, 1]), np.array([1.0, 1.0]), {1: 50.0}
+    )
+    assert owner.tolist() == [0] + [1] * values.size
+    assert out["delta_v_kmh"][0] == 30.0  # type: ignore[index]
+    assert np.allclose(out["delta_v_kmh"][1:], values)  # type: ignore[index]
+    assert np.allclose(w[1:], weights)
+    assert out["restraint"] == ["belted"] + ["none"] * values.size
