@@ -956,9 +956,10 @@ class RiskModel:
             An operating point the artifact does not define.
         """
         name = operating_point or self.default_operating_point
-        if knowledge is not None and name in self.knowledge_thresholds:
-            # a measured delta-V is read as the reconstruction it stands for: the same threshold
-            return self.knowledge_thresholds[name][knowledge.removesuffix("_measured")]
+        if name in self.knowledge_thresholds:
+            # a measured delta-V is read as the reconstruction it stands for: the same
+            # threshold; without a knowledge, an adult's with the age sent (the vehicle's)
+            return self.knowledge_thresholds[name][(knowledge or "adult").removesuffix("_measured")]
         return self.thresholds[name]
 
 

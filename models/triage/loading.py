@@ -80,6 +80,13 @@ TRIAGE_SOURCES = (
 
 
 @lru_cache(maxsize=1)
+def measurement_code_sha256() -> str:
+    """SHA-256 of the delta-V measurement model's code (``field/measurement.py``), computed
+    once (at load: parsing source is not safe in many request threads at once)."""
+    return sources_sha256(("field/measurement.py",))
+
+
+@lru_cache(maxsize=1)
 def triage_code_sha256() -> str:
     """SHA-256 over :data:`TRIAGE_SOURCES` (as :func:`models.lpm.fingerprint.sources_sha256`)."""
     return sources_sha256(TRIAGE_SOURCES)
@@ -145,7 +152,7 @@ class EngineModels:
                 infos["delta_v_measurement"] = ModelInfo(
                     name=measurement.name,
                     version=measurement.version,
-                    sha256=sources_sha256(("field/measurement.py",)),
+                    sha256=measurement_code_sha256(),
                 )
         names = sorted(self.parameter_sets) if vehicle_model is None else [vehicle_model]
         for name in names:
@@ -266,6 +273,7 @@ def load_engine_models(
     # source; CPython 3.11's parser is not safe to run from several threads at once)
     lpm_code_sha256()
     triage_code_sha256()
+    measurement_code_sha256()
     evaluation_sha256()
     if warm:
         warm_up()

@@ -121,7 +121,12 @@ def test_out_of_coverage_occupants_get_the_field_model_and_a_note(models: Engine
     assert occ.iss is None
     assert occ.interval_method is None
     assert any("outside every occupant model" in a.message for a in result.assumptions)
-    assert set(result.models) == {"baseline", "field_model", "triage_code"}
+    assert set(result.models) == {
+        "baseline",
+        "field_model",
+        "delta_v_measurement",
+        "triage_code",
+    }
 
 
 def test_severity_rises_with_delta_v(models: EngineModels) -> None:
@@ -323,7 +328,12 @@ def test_every_case_records_the_code_that_turned_it_into_an_answer(models: Engin
     assert lpm.models["surrogate_evaluation"].sha256 == evaluation_sha256()
     rear_seat = dataclasses.replace(_notification().occupants[0], seat=Seat.REAR_LEFT)
     baseline_only = triage(_notification(occupants=(rear_seat,)), models)
-    assert set(baseline_only.models) == {"baseline", "field_model", "triage_code"}
+    assert set(baseline_only.models) == {
+        "baseline",
+        "field_model",
+        "delta_v_measurement",
+        "triage_code",
+    }
 
 
 def test_the_triage_code_checksum_covers_the_whole_package() -> None:

@@ -175,8 +175,10 @@ def test_a_notification_with_second_row_occupants_is_triaged_not_refused(
     codes = [(a["code"], a["occupant"]) for a in result["assumptions"]]
     assert ("seat_without_occupant_model", 1) in codes
     assert ("seat_without_occupant_model", 2) in codes
-    # the 9-year-old is outside the field data (adults): said so
-    assert ("outside_field_population", 1) in codes
+    # the 9-year-old is in the field data (children included); its region risks are the
+    # adults' models' (carried from 3.2.0): said so
+    assert ("outside_field_population", 1) not in codes
+    assert ("child_region_risk_extrapolated", 1) in codes
     for o in result["occupants"]:
         assert o["triage"]["outcome"] == "ISS15+"
         assert len(o["region_risk"]) == 8

@@ -139,7 +139,7 @@ def test_a_child_in_a_child_seat_is_answered_by_the_childrens_model(api: ApiClie
     codes = {a["code"] for a in answer["assumptions"]}
     assert "outside_field_population" not in codes  # children are in the field data now
     t = answer["occupants"][0]["triage"]
-    assert t["knowledge"] == "child"
+    assert t["knowledge"] == "child_measured"  # a summary's delta-V is measured by default
     assert "pediatric" in t["recommendation"]
     stored = stored_case(api, answer["case_id"])
     assert stored["notification"]["occupants"][0]["child_restraint"] == "forward_facing_seat"
@@ -172,7 +172,7 @@ def test_an_adult_of_unknown_age_is_integrated_not_taken_at_the_median(api: ApiC
         occ.pop(key, None)
     unknown = post_case(api, body)
     t = unknown["occupants"][0]["triage"]
-    assert t["knowledge"] == "age_unknown"
+    assert t["knowledge"] == "age_unknown_measured"
     lo, hi = t["unknown_inputs_range95"]
     assert lo < t["probability"] < hi
     assert t["probability_ci95"][0] <= t["probability"] <= t["probability_ci95"][1]
@@ -180,10 +180,15 @@ def test_an_adult_of_unknown_age_is_integrated_not_taken_at_the_median(api: ApiC
     assert "inputs_integrated" in codes
     assert "age_imputed" not in codes
     median = example("summary")
-    median["occupants"][0].update(age_years=39)
+    median["occupants"][0].update(age_years=39, sex="male", stature_cm=175, mass_kg=78)
+    median["crash"]["pulse"]["delta_v_source"] = "reconstructed"
+    body["crash"]["pulse"]["delta_v_source"] = "reconstructed"
+    body["event_id"] = "test-unknown-age-reconstructed"
+    unknown_rec = post_case(api, body)["occupants"][0]["triage"]
     at_median = post_case(api, median)["occupants"][0]["triage"]
-    assert at_median["unknown_inputs_range95"] is None
-    assert t["probability"] != at_median["probability"]
+    assert at_median["knowledge"] == "adult"
+    assert unknown_rec["knowledge"] == "age_unknown"
+    assert unknown_rec["probability"] != at_median["probability"]
 
 
 def _nemsis(api: ApiClient, case_id: str) -> etree._Element:

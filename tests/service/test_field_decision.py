@@ -228,7 +228,8 @@ def test_assumptions_carry_codes_an_integrator_can_act_on(api: ApiClient) -> Non
     assert r.status_code == 201, r.text
     codes = {(a["code"], a["occupant"]) for a in r.json()["assumptions"]}
     assert ("rollover_reported", None) in codes
-    assert ("age_imputed", 0) in codes
+    assert ("inputs_integrated", 0) in codes  # an unknown age is integrated over, not imputed
+    assert ("age_imputed", 0) not in codes
     assert ("body_unknown", 0) in codes
     assert ("posture_not_sensed", 0) in codes
     assert ("seat_position_not_sensed", 0) in codes

@@ -32,7 +32,7 @@ def test_a_summary_without_a_source_is_read_as_measured(api: ApiClient) -> None:
     assert stored["result"]["pulse"]["delta_v_source"] == "measured"
     assert answer["occupants"][0]["triage"]["knowledge"].endswith("_measured")
     # the measurement model is named with the field model, in the answer and the stored case
-    assert answer["models"]["delta_v_measurement"]["name"] == "delta_v_measurement"
+    assert answer["models"]["delta_v_measurement"]["version"] == "1.1.0"
     assert stored["models"]["delta_v_measurement"] == answer["models"]["delta_v_measurement"]
 
 

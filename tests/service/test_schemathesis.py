@@ -62,6 +62,10 @@ OPERATIONS = [
     ("GET", "/v1/cases"),
     ("GET", "/v1/cases/{case_id}"),
     ("GET", "/v1/cases/{case_id}/nemsis"),
+    ("POST", "/v1/cases/{case_id}/occupants/{seat}/outcome"),
+    ("PUT", "/v1/cases/{case_id}/occupants/{seat}/outcome"),
+    ("GET", "/v1/cases/{case_id}/occupants/{seat}/outcome"),
+    ("GET", "/v1/quality"),
 ]
 
 

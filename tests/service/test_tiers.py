@@ -87,20 +87,21 @@ def test_the_answer_carries_each_tier_and_never_level_one(api: ApiClient, tier: 
 
 
 def test_the_high_threshold_is_configurable_and_stored(sqlite_url: str, tmp_path: Path) -> None:
-    """At 0.05 a 56 km/h frontal crash (P about 0.08, moderate at the default) is high."""
+    """At 0.025 a 56 km/h frontal crash (P about 0.03 measured, moderate at the default) is
+    high."""
     settings = Settings(
-        database_url=sqlite_url, spool_path=tmp_path / "spool.db", high_risk_threshold=0.05
+        database_url=sqlite_url, spool_path=tmp_path / "spool.db", high_risk_threshold=0.025
     )
     with TestClient(create_app(settings)) as client:
         _, key = create_api_key(client.app.state.ctx.sessions, name="s", role=Role.SUBMITTER)
         r = client.post("/v1/cases", json=summary(56.0), headers={"Authorization": f"Bearer {key}"})
         assert r.status_code == 201, r.text
         triage = r.json()["triage"]
-        assert 0.05 <= triage["probability"] < 0.2
-        assert (triage["tier"], triage["high_threshold"]) == ("high", 0.05)
+        assert 0.025 <= triage["probability"] < 0.2
+        assert (triage["tier"], triage["high_threshold"]) == ("high", 0.025)
         with client.app.state.ctx.sessions() as session:
             row = session.get(Case, r.json()["case_id"])
-            assert (row.tier, row.high_threshold) == ("high", 0.05)
+            assert (row.tier, row.high_threshold) == ("high", 0.025)
 
 
 # ------------------------------------------------------------------ refusal to start

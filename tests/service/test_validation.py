@@ -37,7 +37,7 @@ def _acceleration(**pulse: Any) -> dict[str, Any]:
         (lambda b: b["occupants"][0].update(frontal_airbag="maybe"), "occupants[0].frontal_airbag"),
         (lambda b: b["occupants"][0].update(side_airbag="curtain"), "occupants[0].side_airbag"),
         (lambda b: b["occupants"][0].update(age_years=-3), "occupants[0].age_years"),
-        (lambda b: b["occupants"][0].pop("belted"), "occupants[0].belted"),
+        (lambda b: b["occupants"][0].update(belted="yes"), "occupants[0].belted"),
         (lambda b: b.update(occupants=[]), "occupants"),
         (lambda b: b.update(occurred_at="2026-11-23T08:15:30"), "occurred_at"),
         (lambda b: b.update(event_id="has space"), "event_id"),

@@ -132,7 +132,7 @@ def test_a_veds_document_is_triaged_as_its_json_twin(api: ApiClient, name: str) 
     assert _triage_part(veds) == _triage_part(twin)
     # the VEDS answer adds what the mapping assumed, in front of the engine's own
     assert "veds_vehicle_class_assumed" in _codes(veds)
-    assert "age_imputed" in _codes(veds), "VEDS gives no occupant's age"
+    assert "inputs_integrated" in _codes(veds), "VEDS gives no occupant's age"
 
 
 def test_side_airbags_go_to_the_near_side_driver_as_in_json(api: ApiClient) -> None:

@@ -78,7 +78,8 @@ README_EXAMPLE: Final[dict[str, Any]] = {
 #: One notification for each risk tier, chosen to land in it (the README shows each with
 #: its answer; tests/models/field/test_readme_figures.py holds each to its tier): an
 #: unbelted 70-year-old driver without an airbag at 70 km/h frontal (high), the README's
-#: own example (moderate), a belted 30-year-old driver at 15 km/h frontal (none).
+#: own driver at 60 km/h (moderate), a belted 30-year-old driver at 15 km/h frontal (none).
+#: Each delta-V is sent as a vehicle measures it (the wire's default).
 TIER_EXAMPLES: Final[dict[str, dict[str, Any]]] = {
     "high": {
         "event_id": "tsp-high",
@@ -96,7 +97,11 @@ TIER_EXAMPLES: Final[dict[str, dict[str, Any]]] = {
             }
         ],
     },
-    "moderate": README_EXAMPLE,
+    "moderate": {
+        **README_EXAMPLE,
+        "event_id": "tsp-moderate",
+        "crash": {"pulse": {"kind": "summary", "delta_v_kmh": 60, "pdof_deg": 0}},
+    },
     "none": {
         "event_id": "tsp-none",
         "occurred_at": "2026-11-23T08:15:30Z",
@@ -226,9 +231,8 @@ def _tier_lines(example: Mapping[str, Any]) -> list[str]:
         return []
     lines = [
         "",
-        "One notification chosen for each risk tier (the `triage` of its answer; the README's "
-        "example above is the moderate one; `models/offline/field/readme.py` holds the "
-        "notifications):",
+        "One notification chosen for each risk tier (the `triage` of its answer; "
+        "`models/offline/field/readme.py` holds the notifications):",
         "",
         "| tier | notification (driver) | P(ISS 15+) [95 % CI] | recommendation |",
         "|---|---|---|---|",
@@ -243,10 +247,13 @@ def _tier_lines(example: Mapping[str, Any]) -> list[str]:
     high = tiers["high"]
     lines += [
         "",
-        'The high and none notifications, to POST as in "Try it":',
+        'The three notifications, to POST as in "Try it":',
         "",
         "```json",
-        *(json.dumps(TIER_EXAMPLES[t], separators=(", ", ": ")) for t in ("high", "none")),
+        *(
+            json.dumps(TIER_EXAMPLES[t], separators=(", ", ": "))
+            for t in ("high", "moderate", "none")
+        ),
         "```",
         "",
         f"`high`: at or above the high-risk threshold ({high['high_threshold']:.2f}, "

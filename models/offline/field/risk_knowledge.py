@@ -24,10 +24,12 @@ by crash:
 
 from __future__ import annotations
 
+import warnings
 from collections.abc import Callable, Sequence
 from typing import Any, Final
 
 import numpy as np
+from scipy.linalg import LinAlgWarning
 from tqdm import tqdm
 
 from models.arrays import FloatArray, IntArray
@@ -230,9 +232,13 @@ def knowledge_extras(
     child_cols = [ALL_COLUMNS_3.index(c) for c in (*plain_columns, *_child_columns())]
 
     def plain_fit(tr: IntArray) -> AnyFitted:
-        # columns constant among the training children (e.g. the clamped age) are dropped
+        # columns constant among the training children (e.g. the clamped age) are dropped;
+        # near-collinear ones (stature and mass clamped at their floors) leave the Newton
+        # solver ill-conditioned, and scikit-learn then finishes with lbfgs (said, not wrong)
         cols = [c for c in child_cols if c == 0 or np.ptp(d.x[tr, c]) > 0]
-        return fit_model(d.x[tr], y[tr], w[tr], cols, None)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", LinAlgWarning)
+            return fit_model(d.x[tr], y[tr], w[tr], cols, None)
 
     plain = _oof_of(plain_fit, d, child_folds)
     yc, wc = y[child], w[child]

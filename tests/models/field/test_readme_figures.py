@@ -54,10 +54,11 @@ def test_the_example_is_answered_by_the_iss15_model(answer: dict[str, object]) -
 @pytest.mark.parametrize("tier", ["high", "moderate", "none"])
 def test_each_tier_example_lands_in_its_tier(answer: dict[str, object], tier: str) -> None:
     """The README shows one notification per tier, chosen for the tier it must show; the
-    moderate one is the README's own example (2.0 % against the 1.8 % threshold)."""
+    moderate one is the README's own driver at 60 km/h (its 40 km/h, sent as measured by
+    the vehicle, reads as a 31 km/h reconstruction: no telemetry indication)."""
     tiers = answer["tiers"]
     assert isinstance(tiers, dict)
     assert tiers[tier]["tier"] == tier
     assert "Level I" not in tiers[tier]["recommendation"]
-    assert TIER_EXAMPLES["moderate"] == README_EXAMPLE
-    assert answer["tier"] == "moderate"
+    assert TIER_EXAMPLES["moderate"]["occupants"] == README_EXAMPLE["occupants"]
+    assert answer["tier"] == "none"
