@@ -51,7 +51,7 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         "outcome": "anyone ISS15+",
         "model": "field_iss15@3.3.0",
         "tier": "moderate",
-        "threshold": 0.01669,
+        "threshold": 0.01798,
         "high_threshold": 0.2,
     },
     "occupants": [
@@ -249,7 +249,7 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         },
         "triage_code": {
             "version": "0.2.0",
-            "sha256": "cd4ff2db21254f3ed94c43813543c59aa8e14cfd2e244efcab9d1882b31bd621",
+            "sha256": "8d0ccd649c1a9df61d056a938660b23c759b3f9e69dd51a35f22127c5a6d29ec",
         },
         "risk_calibration": {
             "version": "1",
