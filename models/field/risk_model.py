@@ -749,7 +749,7 @@ class RiskModel:
             x, imputed = self.design(inputs)
             n = len(inputs)
             return x, np.arange(n), np.ones(n), imputed, tuple(() for _ in inputs)
-        placeholder, blocks, integrated = [], [], []
+        stand_ins, blocks, integrated = [], [], []  # unknown inputs: values the donors replace
         measured: dict[int, float] = {}
         for i, f in enumerate(inputs):
             restraint = restraint_of(f)
@@ -764,7 +764,7 @@ class RiskModel:
                 )
                 if value is None
             )
-            placeholder.append(
+            stand_ins.append(
                 replace(f, restraint=Restraint.BELTED)
                 if isinstance(f, ChildRiskInputs) and restraint is None
                 else f
@@ -784,13 +784,13 @@ class RiskModel:
                 unknown = (*unknown, "delta_v_kmh")
             integrated.append(unknown)
         assert self.impact_count_imputed is not None
-        arrays, imputed = inputs_arrays_3(placeholder, self.imputation, self.impact_count_imputed)
+        arrays, imputed = inputs_arrays_3(stand_ins, self.imputation, self.impact_count_imputed)
         expanded, owner = substitute(arrays, blocks, self.donors)
         counts = np.bincount(owner, minlength=len(inputs)).astype(np.float64)
         weight = 1.0 / counts[owner]
         if measured:
             expanded, owner, weight = over_reconstructed_nodes(expanded, owner, weight, measured)
-        # medians stood in for the unknown inputs only as placeholders
+        # the medians inputs_arrays_3 put in for unknown inputs were replaced by the donors'
         named = tuple(
             tuple(k for k in imp if k not in unknown)
             for imp, unknown in zip(imputed, integrated, strict=True)

@@ -238,7 +238,7 @@ def substitute(
     Parameters
     ----------
     arrays : mapping of str to array, each shape (n,)
-        Raw inputs (unknown ones hold any placeholder).
+        Raw inputs (an unknown one holds any value: the donors' replace it).
     rows : sequence of (row, donors, unknown names)
         Per output block: the input row, the donor indices (None: the row
         alone) and the names of :data:`INTEGRATED_INPUTS` to take from them.

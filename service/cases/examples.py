@@ -249,7 +249,7 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         },
         "triage_code": {
             "version": "0.2.0",
-            "sha256": "8d0ccd649c1a9df61d056a938660b23c759b3f9e69dd51a35f22127c5a6d29ec",
+            "sha256": "76feb923dd519531f5aa9cc9a1747b965e5660d2e90df0dcee621a48c6156259",
         },
         "risk_calibration": {
             "version": "1",
