@@ -29,27 +29,27 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
     "received_at": "2026-11-23T08:15:31Z",
     "triage": {
         "iss15_plus": True,
-        "probability": 0.03033,
-        "probability_ci95": [0.02493, 0.03687],
+        "probability": 0.03974,
+        "probability_ci95": [0.03381, 0.04666],
         "threshold": 0.01798,
         "recommendation": "Vehicle telemetry consistent with severe injury (2021 "
         "guideline, moderate risk): consider a trauma center, which need "
         "not be the highest level; EMS judgment and local protocol "
         "decide.",
         "outcome": "ISS15+",
-        "model": "field_iss15@3.3.0",
+        "model": "field_iss15@3.3.1",
         "operating_point": "sens85",
-        "unknown_inputs_range95": [0.01871, 0.04764],
+        "unknown_inputs_range95": [0.02153, 0.04764],
         "knowledge": "adult_measured",
         "tier": "moderate",
         "high_threshold": 0.2,
     },
     "vehicle": {
-        "probability": 0.03033,
-        "probability_ci95": [0.02425, 0.03674],
+        "probability": 0.03974,
+        "probability_ci95": [0.03278, 0.04662],
         "heldout_auc": 0.8891,
         "outcome": "anyone ISS15+",
-        "model": "field_iss15@3.3.0",
+        "model": "field_iss15@3.3.1",
         "tier": "moderate",
         "threshold": 0.01798,
         "high_threshold": 0.2,
@@ -140,17 +140,17 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
             },
             "triage": {
                 "iss15_plus": True,
-                "probability": 0.03033,
-                "probability_ci95": [0.02493, 0.03687],
+                "probability": 0.03974,
+                "probability_ci95": [0.03381, 0.04666],
                 "threshold": 0.01798,
                 "recommendation": "Vehicle telemetry consistent with severe injury "
                 "(2021 guideline, moderate risk): consider a "
                 "trauma center, which need not be the highest "
                 "level; EMS judgment and local protocol decide.",
                 "outcome": "ISS15+",
-                "model": "field_iss15@3.3.0",
+                "model": "field_iss15@3.3.1",
                 "operating_point": "sens85",
-                "unknown_inputs_range95": [0.01871, 0.04764],
+                "unknown_inputs_range95": [0.02153, 0.04764],
                 "knowledge": "adult_measured",
                 "tier": "moderate",
                 "high_threshold": 0.2,
@@ -213,7 +213,7 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
             "message": "occupants[0]: delta-V measured by the vehicle (56.0 km/h): the "
             "field risk models learned reconstructed delta-V, which reads "
             "lower; the probability is the average over the reconstructed "
-            "delta-V the measurement model (delta_v_measurement@1.1.0) gives "
+            "delta-V the measurement model (delta_v_measurement@1.2.0) gives "
             "for it",
             "occupant": 0,
         },
@@ -221,7 +221,7 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
             "code": "inputs_integrated",
             "message": "occupants[0]: stature, mass unknown: the probability is the "
             "average over such occupants of this seat in the field data (the "
-            "spread over them 0.0187-0.0476, in `unknown_inputs_range95`)",
+            "spread over them 0.0215-0.0476, in `unknown_inputs_range95`)",
             "occupant": 0,
         },
     ],
@@ -232,12 +232,12 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
             "sha256": "b670eb94214f8538cb2bf5a286f617204aec2c091e667622dc418cd6b1ac7710",
         },
         "field_model": {
-            "version": "3.3.0",
-            "sha256": "d0bbc0c00f968dcec257423378436b9984462dabb66692e980570e399f302213",
+            "version": "3.3.1",
+            "sha256": "9225df7c46014ee538a581441ccf80c9cc60ae88c24077b81df5205756bd2e52",
         },
         "delta_v_measurement": {
-            "version": "1.1.0",
-            "sha256": "28c3d2a763d8007073d5e4e0c5e8fc06ee11da60f40b34d4b4f16ac443522ff1",
+            "version": "1.2.0",
+            "sha256": "47b600b93e2c6483c70b55c175ee3c5de00e84d217d68c0af8f8bd5ee8dccc8a",
         },
         "lpm_parameters:compact_sedan": {
             "version": "compact_sedan",
@@ -249,7 +249,7 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         },
         "triage_code": {
             "version": "0.2.0",
-            "sha256": "76feb923dd519531f5aa9cc9a1747b965e5660d2e90df0dcee621a48c6156259",
+            "sha256": "aad8764769a9b081e299640efd80c2ae5336837fdb1ec03bb002a8c869fa047a",
         },
         "risk_calibration": {
             "version": "1",
