@@ -68,7 +68,7 @@ def _run(args: argparse.Namespace) -> int:
 
 
 def _run_recalibrate(args: argparse.Namespace) -> int:
-    from models.field.recalibration import TooFewOutcomes
+    from models.field.recalibration import SE_LOGIT_REQUIRED, TooFewOutcomes
     from models.field.risk_model import RiskModel, load_default
     from models.field.versions import load_field_artifact
     from service.db import migrate
@@ -126,6 +126,13 @@ def _run_recalibrate(args: argparse.Namespace) -> int:
     )
     if not cv.improves:
         _say("warning: held out, the recalibration does not lower the log loss", err=True)
+    if r.intercept_se > SE_LOGIT_REQUIRED:
+        _say(
+            f"warning: the intercept's robust SE {r.intercept_se:.3f} exceeds the required "
+            f"{SE_LOGIT_REQUIRED:.3f}: the outcomes cluster within cases, so they carry less "
+            "than their count (docs/outcomes.md)",
+            err=True,
+        )
     for name, (before, after) in result.thresholds.items():
         _say(f"operating point {name}: threshold {before:.5f} -> {after:.5f} (same occupants)")
     if result.path is None:
