@@ -169,6 +169,27 @@ def unit_part(local: LocalOutcomes) -> None:
         f"recalibrated on half, P/O on the other: {inside} of {SPLITS} splits in 0.8-1.25 "
         f"(median {np.median(ratios):.2f}, range {min(ratios):.2f}-{max(ratios):.2f})"
     )
+    silent = fired = 0
+    for seed in range(SPLITS):
+        a, b = crash_halves(data, seed)
+        train, test = data.subset(a), data.subset(b)
+        plan = precision_plan(train.probability, train.serious, train.weight)
+        fit = fit_recalibration(
+            train.probability, train.serious, train.weight, list(train.crash), plan.method
+        )
+        served = LocalOutcomes(
+            apply_recalibration(test.probability, fit.intercept, fit.slope),
+            test.serious,
+            test.weight,
+            test.crash,
+            test.age_years,
+        )
+        silent += alarm(served).state == "ok"
+        fired += alarm(halve_odds(served, seed)).state == "alarm"
+    _say(
+        f"recalibrated on half, the other half as it is: silent in {silent} of {SPLITS}; "
+        f"odds halved: fired in {fired} of {SPLITS}"
+    )
     # cross-fitted: each half predicted by the recalibration fitted on the other
     a, b = crash_halves(data, SEED)
     held = data.probability.copy()
