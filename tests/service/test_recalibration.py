@@ -1,7 +1,8 @@
 """`aacn-triage outcomes recalibrate` (issue 50, item 4), end to end over HTTP and the CLI.
 
-Cases are submitted over HTTP and triaged by the served model; their outcomes are
-imported as a registry extract, drawn (seeded) from a known shift of the served
+Cases are submitted over HTTP and triaged by the served model; their outcomes, written
+over HTTP by the registry key (the first cases) and imported as a registry extract (the
+rest), are drawn (seeded) from a known shift of the served
 probabilities: ``logit P_true = -1 + logit P_served`` (the model over-predicts, the
 odds e times too high). The command refuses with too few ISS 15+ outcomes and says
 how many are needed; with enough it writes a new version whose provenance names the
@@ -95,20 +96,48 @@ def _submit(api: ApiClient, cases: range) -> list[tuple[str, str, float]]:
     return out
 
 
+def _draw(occupants: list[tuple[str, str, float]], seed: int) -> list[bool]:
+    """ISS 15+ of each occupant, drawn from the shift."""
+    rng = np.random.default_rng(seed)
+    return [
+        bool(rng.random() < _expit(SHIFT_INTERCEPT + SHIFT_SLOPE * _logit(p)))
+        for _, _, p in occupants
+    ]
+
+
+def _put(api: ApiClient, occupants: list[tuple[str, str, float]]) -> int:
+    """Outcomes drawn from the shift, written over HTTP by the registry key; the ISS 15+."""
+    serious = _draw(occupants, 52)
+    for (case_id, seat, _), s in zip(occupants, serious, strict=True):
+        body = {
+            "iss": 17 if s else 4,
+            "mais": 3 if s else 2,
+            "died": False,
+            "disposition": "admitted_icu" if s else "discharged_from_ed",
+            "source": "trauma_registry",
+            "recorded_at": "2026-12-01T10:00:00Z",
+        }
+        r = api.client.put(
+            f"/v1/cases/{case_id}/occupants/{seat}/outcome",
+            json=body,
+            headers=api.headers("registry"),
+        )
+        assert r.status_code == 201, r.text
+    return sum(serious)
+
+
 def _import(occupants: list[tuple[str, str, float]], path: Path) -> int:
     """Outcomes drawn from the shift, imported as a registry extract; the ISS 15+ count."""
-    rng = np.random.default_rng(51)
-    lines, events = [], 0
-    for case_id, seat, p in occupants:
-        serious = rng.random() < _expit(SHIFT_INTERCEPT + SHIFT_SLOPE * _logit(p))
-        events += serious
-        iss, mais, where = (17, 3, "admitted_icu") if serious else (4, 2, "discharged_from_ed")
+    serious = _draw(occupants, 51)
+    lines = []
+    for (case_id, seat, _), s in zip(occupants, serious, strict=True):
+        iss, mais, where = (17, 3, "admitted_icu") if s else (4, 2, "discharged_from_ed")
         lines.append(
             f"{case_id},,,{seat},{iss},{mais},false,{where},trauma_registry,2026-12-01T10:00Z,\n"
         )
     path.write_text(HEADER + "".join(lines))
     assert cli.main(["outcomes", "import", str(path)]) == 0
-    return events
+    return sum(serious)
 
 
 def test_recalibrate_refuses_then_writes_a_version_rescore_compares_and_serves(
@@ -116,7 +145,7 @@ def test_recalibrate_refuses_then_writes_a_version_rescore_compares_and_serves(
 ) -> None:
     served = load_default()
     first = _submit(env_api, range(12))
-    events = _import(first, tmp_path / "first.csv")
+    events = _put(env_api, first)
     capsys.readouterr()
     # too few ISS 15+: refused, the minimum and its reason said, nothing written
     assert cli.main(["outcomes", "recalibrate", "--site", "county-x"]) == 1
