@@ -165,3 +165,23 @@ def test_the_loader_applies_it_to_rows_deterministically() -> None:
     after = model.decision_probability(x)
     assert np.allclose(after, apply_recalibration(before, a, b), rtol=1e-12)
     assert np.array_equal(after, RiskModel.from_document(doc).decision_probability(x))
+
+
+def test_a_recalibrated_model_recalibrated_again_composes() -> None:
+    served = load_default()
+    first = RiskModel.from_document(_recalibrated(served, -0.5, 1.0))
+    second = RiskModel.from_document(_recalibrated(first, 0.4, 0.9))
+    assert second.version == "3.3.0+local.test-site.1"  # numbered against the given list
+    fa, fb = first.recalibration or (0.0, 1.0)
+    doc = second.document["recalibration"]
+    sa, sb = doc["fitted"]["intercept"], doc["fitted"]["slope"]
+    assert doc["fitted"]["on_version"] == first.version
+    x = np.zeros((3, len(served.candidate_columns)))
+    x[:, 0] = 1.0
+    x[:, served.candidate_columns.index("delta_v_kmh")] = [30.0, 50.0, 70.0]
+    twice = apply_recalibration(apply_recalibration(served.decision_probability(x), fa, fb), sa, sb)
+    assert np.allclose(second.decision_probability(x), twice, rtol=1e-10)
+    t = served.thresholds["sens85"]
+    assert second.thresholds["sens85"] == pytest.approx(
+        map_threshold(map_threshold(t, fa, fb), sa, sb), rel=1e-12
+    )
