@@ -66,6 +66,12 @@ class Settings(BaseSettings):
         description="Field model artifact (JSON); None: the shipped one. An altered or stale "
         "artifact leaves the service not ready.",
     )
+    local_model_dir: Path = Field(
+        default=Path("local-models"),
+        description="Directory of this site's recalibrated field models "
+        "(`aacn-triage outcomes recalibrate` writes them there; `cases rescore --model` finds "
+        "them there beside the shipped ones). Serve one with AACN_FIELD_ARTIFACT.",
+    )
     allow_withdrawn_field_model: bool = Field(
         default=False,
         description="Serve a field model version withdrawn for a defect "

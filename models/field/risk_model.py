@@ -432,6 +432,11 @@ def _logit(p: FloatArray) -> FloatArray:
     return out
 
 
+def _recal(p: float, a: float, b: float) -> float:
+    """One probability through the recalibration ``expit(a + b logit p)``."""
+    return float(_expit(a + b * _logit(np.array(p))))
+
+
 def _integrated(
     logits: Sequence[tuple[FloatArray, FloatArray]], owner: IntArray, weight: FloatArray, n: int
 ) -> tuple[FloatArray, FloatArray, FloatArray, list[tuple[float, float] | None]]:
@@ -516,6 +521,11 @@ class RiskModel:
         The delta-V measurement model a measured delta-V is read through
         (:mod:`models.field.measurement`; 3.3.0 on). None: every delta-V is
         taken as reconstructed, as the data's (older artifacts).
+    recalibration : (float, float) or None
+        ``(a, b)`` of a local recalibration of the decision,
+        ``logit P = a + b logit P_decided`` (:mod:`models.field.recalibration`),
+        applied to the decided probability, its interval and refits, and the
+        spread over unknown inputs; None: the national model as fitted.
     """
 
     name: str
@@ -537,6 +547,7 @@ class RiskModel:
     donors: DonorTable | None = None
     knowledge_thresholds: Mapping[str, Mapping[str, float]] = field(default_factory=dict)
     measurement: MeasurementModel | None = None
+    recalibration: tuple[float, float] | None = None
 
     @classmethod
     def from_artifact(cls, path: str | Path) -> RiskModel:
@@ -680,6 +691,12 @@ class RiskModel:
                     raise ArtifactError(f"operating point {n!r}: thresholds by knowledge malformed")
                 by_knowledge[str(n)] = table
         model = _get(doc, "model")
+        recal = None
+        if "recalibration" in doc:
+            rc = _get(doc, "recalibration")
+            recal = (float(_get(rc, "intercept")), float(_get(rc, "slope")))
+            if not all(np.isfinite(recal)) or recal[1] <= 0.0:
+                raise ArtifactError("`recalibration` must be finite with a positive slope")
         return cls(
             name=str(_get(model, "name")),
             version=str(_get(model, "version")),
@@ -702,6 +719,7 @@ class RiskModel:
             donors=donors,
             knowledge_thresholds=by_knowledge,
             measurement=measurement,
+            recalibration=recal,
         )
 
     def design(
@@ -837,6 +855,13 @@ class RiskModel:
             spread: list[tuple[float, float] | None] = [None] * n
         else:
             eta, sd, boot_p, spread = _integrated(logits, owner, weight, n)
+        if self.recalibration is not None:  # the decision's local recalibration
+            a, b = self.recalibration
+            eta[0], sd[0] = a + b * eta[0], b * sd[0]
+            boot_p = _expit(a + b * _logit(boot_p))
+            spread = [
+                None if s is None else (_recal(s[0], a, b), _recal(s[1], a, b)) for s in spread
+            ]
         p = _expit(eta)
         lo = np.minimum(_expit(eta - Z_95 * sd), p).tolist()
         hi = np.maximum(_expit(eta + Z_95 * sd), p).tolist()
@@ -897,6 +922,15 @@ class RiskModel:
             else:
                 out.append(m.logits(x))
         return out
+
+    def decision_probability(self, x_all: FloatArray) -> FloatArray:
+        """P(ISS 15+) (n,) of full design rows (n, K) with every input known (recalibrated
+        when the artifact is): the decision of :meth:`predict_many` for rows that need
+        no integration (e.g. the data's own rows, reconstructed delta-V)."""
+        eta, _ = self._logits([self.decision], x_all)[0]
+        if self.recalibration is not None:
+            eta = self.recalibration[0] + self.recalibration[1] * eta
+        return _expit(eta)
 
     def predict(self, inputs: RiskInputs) -> RiskPrediction:
         """One occupant's answer (:meth:`predict_many` of one)."""

@@ -11,6 +11,7 @@ byte for byte, for recall reports (``aacn-triage cases rescore --model``).
 from __future__ import annotations
 
 import json
+from collections.abc import Sequence
 from pathlib import Path
 
 from models.field.model import ARTIFACT_SCHEMA as MAIS3_SCHEMA
@@ -48,30 +49,34 @@ def load_field_artifact(path: str | Path) -> AnyFieldModel:
     )
 
 
-def artifact_versions() -> dict[str, Path]:
-    """Every shipped field model artifact (both kinds), by version."""
+def artifact_versions(local_dirs: Sequence[Path] = ()) -> dict[str, Path]:
+    """Every field model artifact (both kinds) by version: the shipped ones, then those
+    in `local_dirs` (a site's recalibrated models, ``aacn-triage outcomes recalibrate``;
+    a local file never replaces a shipped version)."""
     out: dict[str, Path] = {}
-    for path in sorted(default_artifact_path().parent.glob("field_*.json")):
+    shipped = sorted(default_artifact_path().parent.glob("field_*.json"))
+    local = [p for d in local_dirs for p in sorted(Path(d).glob("field_*.json"))]
+    for path in (*shipped, *local):
         try:
             version = json.loads(path.read_text(encoding="utf-8"))["model"]["version"]
         except (OSError, ValueError, KeyError, TypeError):
             continue
-        out[str(version)] = path
+        out.setdefault(str(version), path)
     return out
 
 
-def artifact_for_version(version: str) -> Path:
-    """The shipped artifact of field model `version` (either kind).
+def artifact_for_version(version: str, local_dirs: Sequence[Path] = ()) -> Path:
+    """The artifact of field model `version` (either kind), shipped or in `local_dirs`.
 
     Raises
     ------
     LookupError
-        No artifact of that version (the message lists those shipped).
+        No artifact of that version (the message lists those known).
     """
-    versions = artifact_versions()
+    versions = artifact_versions(local_dirs)
     if version not in versions:
         raise LookupError(
-            f"no field model artifact of version {version!r}; shipped: "
+            f"no field model artifact of version {version!r}; shipped or local: "
             + ", ".join(sorted(versions))
         )
     return versions[version]

@@ -20,6 +20,7 @@ Commands::
     aacn-triage cases rescore --model VERSION [--out FILE.csv] [--operating-point NAME]
     aacn-triage cases export --nemsis --out DIR [--since TIME] [--resume] [--agency-...]
     aacn-triage outcomes import FILE.csv [--dry-run] [--by NAME]
+    aacn-triage outcomes recalibrate --site NAME [--out-dir DIR] [--dry-run]
 
 Layout: :mod:`service.cli.operate` (operator commands), :mod:`service.cli.research`
 (hand-overs to the offline tools), :mod:`service.cli.common` (shared helpers); batch
@@ -150,7 +151,7 @@ def build_parser() -> argparse.ArgumentParser:
     )
     cases.set_defaults(func=cmd_cases)
     nemsis_command.add_parser(cases_sub)  # cases export --nemsis (service/nemsis/command.py)
-    outcomes_command.add_parser(sub)  # outcomes import (service/outcomes/command.py)
+    outcomes_command.add_parser(sub)  # outcomes import|recalibrate (service/outcomes/command.py)
 
     for command, (_, text) in HANDED_OVER.items():
         handed = sub.add_parser(command, help=text, add_help=False)

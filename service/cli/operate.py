@@ -150,12 +150,12 @@ def cmd_cases(args: argparse.Namespace) -> int:
     from service.context import engine_models_for
     from service.jobs.rescore import rescore, write_csv
 
-    try:
-        artifact = artifact_for_version(args.model)
+    settings = load_settings()
+    try:  # shipped, or this site's recalibrated models (outcomes recalibrate)
+        artifact = artifact_for_version(args.model, (settings.local_model_dir,))
     except LookupError as exc:
         echo(f"error: {exc}", err=True)
         return 2
-    settings = load_settings()
     # a recall may compare against a withdrawn version (that is what recalls are for)
     overrides: dict[str, Any] = {"field_artifact": artifact, "allow_withdrawn_field_model": True}
     if args.operating_point is not None:

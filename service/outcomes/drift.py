@@ -44,11 +44,11 @@ __all__ = [
 MIN_EXPECTED_EVENTS: Final[float] = 5.0
 #: What an alarm asks of the operator.
 NEXT_STEP: Final[str] = (
-    "Recalibrate the field model on the linked local outcomes (a logistic recalibration, "
-    "intercept and slope), compare it with the served model on the stored cases "
-    "(`aacn-triage cases rescore --model VERSION`), re-derive the operating thresholds for it, "
-    "and switch only then; until then read the decided probabilities as "
-    "{direction} (docs/outcomes.md)."
+    "Recalibrate the field model on the linked local outcomes "
+    "(`aacn-triage outcomes recalibrate --site NAME`: a logistic recalibration, its operating "
+    "thresholds re-derived, written as a new version), compare it with the served model on the "
+    "stored cases (`aacn-triage cases rescore --model VERSION`), and switch only then; until "
+    "then read the decided probabilities as {direction} (docs/outcomes.md)."
 )
 
 

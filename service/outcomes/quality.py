@@ -53,6 +53,7 @@ __all__ = [
     "QualityReport",
     "drift_of",
     "drift_settings_of",
+    "figures_of",
     "occupant_facts",
     "quality_report",
 ]
@@ -343,6 +344,11 @@ def _group(month: str | None, point: str | None, occ: Sequence[LinkedOccupant]) 
         high_tier=_decision(linked, [o.tier is Tier.HIGH for o in linked]),
         calibration=_calibration(linked),
     )
+
+
+def figures_of(occupants: Sequence[LinkedOccupant]) -> QualityGroup:
+    """The quality figures of occupants given, not read from the store (all together)."""
+    return _group(None, None, occupants)
 
 
 def load_occupants(session: Session, filters: QualityFilters) -> list[LinkedOccupant]:

@@ -152,6 +152,7 @@ def served(chromium: Any, tmp_path_factory: pytest.TempPathFactory) -> Iterator[
     keys = {
         "auditor": key("auditor", "ems-supervisor"),
         "submitter": key("submitter", "call-center-north"),
+        "registry": key("registry", "county-trauma-registry"),
     }
     port = free_port()
     log = tmp / "server.log"
@@ -613,3 +614,45 @@ def test_logout_ends_the_session(chromium: Any, served: Served) -> None:
     page.wait_for_url(f"{served.base}/v1/session**")
     assert page.goto(served.url("minor")).status == 401
     context.close()
+
+
+def test_the_quality_page_for_the_auditor(served: Served, signed_in: Any) -> None:
+    """Outcomes linked over the API by the registry key, the auditor reads the quality page:
+    figures, the drift alarm, the reliability plot, the filters; no console errors."""
+    registry = {"Authorization": f"Bearer {served.keys['registry']}"}
+    for name, iss, mais in (("head-injury", 17, 3), ("minor", 4, 2)):
+        case = served.cases[name]
+        seat = case["result"]["occupants"][0]["seat"]
+        r = httpx.put(
+            f"{served.base}/v1/cases/{case['case_id']}/occupants/{seat}/outcome",
+            json={
+                "iss": iss,
+                "mais": mais,
+                "died": False,
+                "disposition": "admitted_ward",
+                "source": "trauma_registry",
+                "recorded_at": "2026-12-01T10:00:00Z",
+            },
+            headers=registry,
+            timeout=30,
+        )
+        assert r.status_code == 201, r.text
+    tab = _tab(signed_in)
+    page = tab.page
+    response = page.goto(f"{served.base}/v1/quality/report")
+    assert response.status == 200
+    assert page.locator("h1").inner_text() == "Triage quality against linked outcomes"
+    assert page.locator("#drift h2").inner_text() == "Drift alarm: insufficient"
+    assert "Too few linked outcomes" in page.locator("#drift").inner_text()
+    overall = page.locator("#overall").inner_text()
+    assert f"{len(served.cases)} cases" in overall
+    plot = page.locator("#overall svg.reliability")
+    assert plot.is_visible()
+    assert plot.locator("circle.point").count() == 2  # two linked occupants, two groups
+    _shot(page, "quality")
+    page.select_option("select[name=crash_mode]", "frontal")
+    page.click("#filters button[type=submit]")
+    page.wait_for_url("**/v1/quality/report?*crash_mode=frontal*")
+    assert page.locator("select[name=crash_mode]").input_value() == "frontal"
+    assert tab.problems == []
+    page.close()
