@@ -138,7 +138,7 @@ def test_versions_and_the_loader_refuses_an_altered_recalibration(tmp_path: Path
         local_version("3.3.0", "A site", [])
     doc = _recalibrated(served, -0.5, 1.0)
     model = RiskModel.from_document(doc)
-    assert model.version == "3.3.0+local.test-site.1"
+    assert model.version == f"{served.version}+local.test-site.1"
     assert model.recalibration == (doc["recalibration"]["intercept"], doc["recalibration"]["slope"])  # type: ignore[index]
     path = tmp_path / "field_iss15-local.json"
     altered = json.loads(json.dumps(doc))
@@ -171,7 +171,9 @@ def test_a_recalibrated_model_recalibrated_again_composes() -> None:
     served = load_default()
     first = RiskModel.from_document(_recalibrated(served, -0.5, 1.0))
     second = RiskModel.from_document(_recalibrated(first, 0.4, 0.9))
-    assert second.version == "3.3.0+local.test-site.1"  # numbered against the given list
+    assert (
+        second.version == f"{served.version}+local.test-site.1"
+    )  # numbered against the given list
     fa, fb = first.recalibration or (0.0, 1.0)
     doc = second.document["recalibration"]
     sa, sb = doc["fitted"]["intercept"], doc["fitted"]["slope"]
