@@ -91,3 +91,41 @@ def test_the_source_is_on_the_case_page(api: ApiClient) -> None:
     measured = post_case(api, _body())
     page = api.client.get(f"/v1/cases/{measured['case_id']}/report", headers=api.headers("auditor"))
     assert "measured by the vehicle" in page.text
+
+
+def test_the_spread_field_widens_with_the_measurement_scatter(api: ApiClient) -> None:
+    """An occupant with every input known: reconstructed, nothing is integrated and the spread
+    over unknown inputs is the probability itself; measured, the reconstructions the
+    measurement allows spread it around the decided probability (`unknown_inputs_range95`,
+    absent when nothing was integrated). The confidence interval stays the interval of that
+    probability."""
+    occupant = {"stature_cm": 176.0, "mass_kg": 78.0}
+
+    def triage(**pulse: Any) -> dict[str, Any]:
+        body = _body(45.0, **pulse)
+        body["occupants"][0].update(occupant)
+        answer: dict[str, Any] = post_case(api, body)["occupants"][0]["triage"]
+        return answer
+
+    rebuilt, measured = triage(delta_v_source="reconstructed"), triage()
+    assert rebuilt["unknown_inputs_range95"] is None
+    assert rebuilt["knowledge"] == "adult"
+    p, (lo, hi) = measured["probability"], measured["unknown_inputs_range95"]
+    assert lo < p < hi
+    low, high = measured["probability_ci95"]
+    assert low < p < high
+
+
+def test_the_source_is_in_the_nemsis_record(api: ApiClient) -> None:
+    """The NEMSIS record's narrative says where the delta-V came from."""
+    agency = {"agency_state_id": "C034", "agency_number": "351-C034P2", "agency_state": "09"}
+    for pulse, words in (
+        ({}, "measured by the vehicle"),
+        ({"delta_v_source": "reconstructed"}, "reconstructed from the vehicle's crush"),
+    ):
+        case_id = post_case(api, _body(**pulse))["case_id"]
+        r = api.client.get(
+            f"/v1/cases/{case_id}/nemsis", params=agency, headers=api.headers("auditor")
+        )
+        assert r.status_code == 200, r.text
+        assert words in r.text
