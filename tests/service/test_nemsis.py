@@ -21,6 +21,7 @@ from lxml import etree
 
 from models.notification import Seat
 from service.auth import Role
+from service.browser_session import SESSION_COOKIE
 from service.cases.result import StoredCase
 from service.cases.veds import VEDS_MEDIA_TYPE, clock_to_pdof_deg
 from service.cli import main as cli
@@ -28,7 +29,6 @@ from service.nemsis import codes
 from service.nemsis.mapping import Agency, pdof_clock_hour
 from service.nemsis.service import NemsisRecordInvalid, agency_from, checked_record
 from service.nemsis.validate import XSD_DIR, validate
-from service.pages.session import SESSION_COOKIE
 from service.settings import Settings, get_settings
 from tests.service.pages_support import Page, csrf_token
 from tests.support import ApiClient, assert_problem, example, post_case, stored_case, summary

@@ -16,12 +16,12 @@ from fastapi.testclient import TestClient
 from models.injury import criteria, risk
 from models.notification import Body
 from service.auth import session_key_tag
+from service.browser_session import SESSION_COOKIE, issue_session
 from service.cases import service as cases_service
 from service.db import repository
 from service.db.tables import ApiKey, Case
 from service.pages import views as report
 from service.pages.drawing import car_diagram, pulse_plot
-from service.pages.session import SESSION_COOKIE, issue_session
 from service.settings import Settings
 from tests.service.pages_support import (
     TIER_CASES,

@@ -11,8 +11,8 @@ from sqlalchemy import func, select
 
 from service.app import create_app
 from service.auth import Role, create_api_key
+from service.browser_session import SESSION_COOKIE
 from service.db.tables import EndedSession
-from service.pages.session import SESSION_COOKIE
 from service.settings import Settings
 from tests.service.pages_support import Page, csrf_token
 from tests.service.test_store_outage import _database

@@ -16,8 +16,8 @@ from datetime import UTC, datetime
 from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session, sessionmaker
 
+from service.browser_session import BrowserSession
 from service.db import repository
-from service.pages.session import BrowserSession
 
 __all__ = ["end_session", "session_has_ended"]
 
