@@ -6,7 +6,7 @@ The service's rooms (``docs/layout.md``): a feature (``pages``, ``nemsis``, ``jo
 infrastructure imports no feature; ``cli/`` and ``app`` compose them all;
 ``service/cases`` (the request path) imports none of ``service/pages``, ``service/jobs``
 or ``service/cli``; only
-``service/cli/research.py`` and ``service/jobs`` import the offline tools; no module
+the research commands (``service/cli/research*.py``) import the offline tools; no module
 but the app factory imports a router; one enum of impact modes; small modules and
 functions.
 
@@ -203,11 +203,15 @@ def _in(module: str, package: str) -> bool:
     return module == package or module.startswith(package + ".")
 
 
-def test_only_the_research_commands_and_the_jobs_import_the_offline_tools() -> None:
+#: The research command line: the only modules of the service that import the lab.
+RESEARCH_COMMANDS = ("service.cli.research", "service.cli.research_dask")
+
+
+def test_only_the_research_commands_import_the_offline_tools() -> None:
     bad = {
         (m, d)
         for m, deps in import_graph().items()
-        if _in(m, "service") and not (m == "service.cli.research" or _in(m, "service.jobs"))
+        if _in(m, "service") and m not in RESEARCH_COMMANDS
         for d in deps
         if _is_offline(d)
     }

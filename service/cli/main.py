@@ -23,7 +23,7 @@ Commands::
 
 Layout: :mod:`service.cli.operate` (operator commands), :mod:`service.cli.research`
 (hand-overs to the offline tools), :mod:`service.cli.common` (shared helpers); batch
-work in :mod:`service.jobs`; ``cases export --nemsis`` in :mod:`service.nemsis.command`.
+work in :mod:`service.jobs`; ``cases export --nemsis`` in :mod:`service.cli.export`.
 """
 
 from __future__ import annotations
@@ -32,6 +32,7 @@ import argparse
 import sys
 from collections.abc import Sequence
 
+from service.cli import export as nemsis_export
 from service.cli.operate import cmd_cases, cmd_db, cmd_keys, cmd_serve, cmd_triage
 from service.cli.research import (
     HANDED_OVER,
@@ -40,7 +41,6 @@ from service.cli.research import (
     cmd_handed_over,
     cmd_simulate,
 )
-from service.nemsis import command as nemsis_command
 from service.outcomes import command as outcomes_command
 
 __all__ = ["build_parser", "main"]
@@ -149,7 +149,7 @@ def build_parser() -> argparse.ArgumentParser:
         "--operating-point", help="operating point (default AACN_OPERATING_POINT or the model's)"
     )
     cases.set_defaults(func=cmd_cases)
-    nemsis_command.add_parser(cases_sub)  # cases export --nemsis (service/nemsis/command.py)
+    nemsis_export.add_parser(cases_sub)  # cases export --nemsis (service/cli/export.py)
     outcomes_command.add_parser(sub)  # outcomes import (service/outcomes/command.py)
 
     for command, (_, text) in HANDED_OVER.items():

@@ -6,5 +6,6 @@
 - ``validate``: validation against the shipped XSDs (``xsd/``, with their provenance).
 - ``service``: who may read which case's record; build and validate (the use case).
 - ``endpoints``: ``GET /v1/cases/{case_id}/nemsis``.
-- ``export``, ``command``: ``aacn-triage cases export --nemsis`` (many cases to a directory).
+- ``export``: many cases to a directory (the command, ``aacn-triage cases export --nemsis``,
+  is ``service.cli.export``).
 """
