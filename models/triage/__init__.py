@@ -25,21 +25,9 @@ Everything here is a pure function of the notification and the loaded models:
 the same inputs and model versions give the same result, bit for bit (only
 `timings_ms` varies).
 
-Layout (one face: import from ``models.triage``, not from its modules)::
-
-    result.py          the answer's types: TriageResult, OccupantTriage, TriageDecision, ...
-    loading.py         EngineModels, load_engine_models, warm_up; the triage_code checksum
-    decision.py        decide: a probability at a threshold (with its tier for the field
-                       decision); the field, occupant-model and baseline decisions; the
-                       case's is the worst occupant's
-    occupant_model.py  the occupant-model explanation: direct runs, injury scores, intervals
-    field_evidence.py  what the field model is given per occupant (also for offline fits)
-    run.py             triage: the notification -> result orchestration
-    simulation.py      simulate_notification: full time histories, for the command line's
-                       ``simulate`` and the offline checks (not the request path)
-
-Imports run one way down the list (result <- loading <- decision <- occupant_model <-
-field_evidence <- run; simulation beside run).
+One face: import from ``models.triage``, not from its modules (each is listed in
+``docs/layout.md``). Imports run one way: result <- loading <- decision <-
+occupant_model <- field_evidence <- run; simulation beside run.
 """
 
 from models.constants import DEFAULT_POSTURE_SD_DEG, DEFAULT_SEAT_TRACK_SD_MM
