@@ -124,7 +124,7 @@ chunks of 64, ordered, written as they come back).
 {chr(10).join(rows)}
 
 2 workers / 1: pool {scale_pool:.2f}, Dask {scale_dask:.2f}. The answers are the same \
-(`tests/service/test_batch_dask.py`). How this grows on more machines: `docs/deploy.md`.
+(`tests/service/jobs/test_batch_dask.py`). How this grows on more machines: `docs/deploy.md`.
 """
     print(text)
     if not args.no_write:

@@ -51,7 +51,7 @@ __all__ = [
 #: with every case (``triage_code``), beside those of the models they call. The
 #: package ``models/triage/`` counts whole: every module of it but its face
 #: (``__init__``, re-exports only) and ``simulation.py`` (not on the answer's path),
-#: in this fixed order (tests/models/test_triage.py checks that none is left out).
+#: in this fixed order (tests/models/triage/test_triage.py checks that none is left out).
 #: Since the package was split from one ``triage.py`` (issue 37) the checksum differs
 #: from the one cases stored before the split record: those keep theirs (a record of
 #: the code that answered them), the code's behaviour is unchanged. The field risk

@@ -396,7 +396,7 @@ def _store_region_risk(served: Served, name: str, region_risk: dict[str, Any] | 
 def test_the_body_map_shows_region_risk_first_and_the_physics_layer_labelled(
     served: Served, signed_in: Any
 ) -> None:
-    from tests.service.test_pages_regions import REGION_RISK
+    from tests.service.pages.test_pages_regions import REGION_RISK
 
     occ = served.cases["head-injury"]["result"]["occupants"][0]
     given = occ.get("region_risk") or None

@@ -1,6 +1,6 @@
 """The case page, the case list and their browser sign-in, through the ASGI app.
 
-These run everywhere (no browser); tests/service/test_pages_browser.py drives the
+These run everywhere (no browser); tests/service/pages/test_pages_browser.py drives the
 same pages in headless Chromium against the real served process.
 """
 

@@ -30,12 +30,13 @@ from service.nemsis.mapping import Agency, pdof_clock_hour
 from service.nemsis.service import NemsisRecordInvalid, agency_from, checked_record
 from service.nemsis.validate import XSD_DIR, validate
 from service.settings import Settings, get_settings
+from tests.paths import VEDS_DOCS
 from tests.service.pages_support import Page, csrf_token
 from tests.support import ApiClient, assert_problem, example, post_case, stored_case, summary
 
 HERE = Path(__file__).parent
-MVC_CASE = HERE / "nemsis" / "2025-EMS-3-MVC_v351.xml"
-VEDS_DIR = HERE / "veds"
+MVC_CASE = HERE / "2025-EMS-3-MVC_v351.xml"
+VEDS_DIR = VEDS_DOCS
 NS = {"n": "http://www.nemsis.org"}
 XSI_NIL = "{http://www.w3.org/2001/XMLSchema-instance}nil"
 AGENCY = {"agency_state_id": "C034", "agency_number": "351-C034P2", "agency_state": "09"}

@@ -28,6 +28,7 @@ from service.db.tables import Case, CaseOccupant
 from service.jobs.rescore import CSV_COLUMNS, rescore
 from service.settings import get_settings
 from tests.conftest import _api
+from tests.paths import VEDS_DOCS
 from tests.support import ApiClient, summary
 
 #: Delta-V of the stored cases, km/h: from a low-speed crash to a severe one, so
@@ -39,8 +40,8 @@ RETIRED = "1.0.0"
 #: The MAIS 3+ refit, retired as the decision by the ISS 15+ model 3.0.0.
 MAIS3 = "2.0.0"
 
-#: VEDS test documents (tests/service/veds/).
-VEDS_DIR = Path(__file__).parent / "veds"
+#: VEDS test documents (tests/service/cases/veds/).
+VEDS_DIR = VEDS_DOCS
 
 
 @pytest.fixture
