@@ -1,4 +1,4 @@
-"""Server-side end of a browser session: a signed-out cookie is refused (issue 41).
+"""Server-side end of a browser session: a signed-out cookie is refused.
 
 The session cookie is signed and carries its expiry; without a record on the
 server, a copy of it kept after the sign-out would open the pages until then.

@@ -30,7 +30,6 @@ One face: import from ``models.triage``, not from its modules (each is listed in
 occupant_model <- field_evidence <- run; simulation beside run.
 """
 
-from models.constants import DEFAULT_POSTURE_SD_DEG, DEFAULT_SEAT_TRACK_SD_MM
 from models.tiers import (
     HIGH_RISK_THRESHOLD,
     RECOMMENDATIONS,
@@ -40,12 +39,10 @@ from models.tiers import (
     tier_of,
 )
 from models.triage.decision import (
-    BASELINE_OUTCOME,
     LPM_THRESHOLDS,
     decide,
 )
 from models.triage.field_evidence import (
-    OccupantEvidence,
     notification_field_inputs,
     occupant_evidence,
 )
@@ -53,54 +50,38 @@ from models.triage.loading import (
     TRIAGE_SOURCES,
     EngineModels,
     load_engine_models,
-    load_surrogates,
     operating_thresholds,
     triage_code_sha256,
     warm_up,
 )
 from models.triage.result import (
-    LPM_OUTCOME,
     IntervalMethod,
-    IssEstimate,
     Method,
-    ModelInfo,
     OccupantTriage,
-    SensorInputs,
     TriageDecision,
     TriageResult,
     UnknownVehicleModel,
-    VehicleRiskAnswer,
 )
 from models.triage.run import (
     triage,
 )
 from models.triage.simulation import (
-    OccupantSimulation,
     simulate_notification,
 )
 
 __all__ = [
-    "DEFAULT_POSTURE_SD_DEG",
-    "DEFAULT_SEAT_TRACK_SD_MM",
     "LPM_THRESHOLDS",
-    "LPM_OUTCOME",
-    "BASELINE_OUTCOME",
     "IntervalMethod",
     "Method",
     "HIGH_RISK_THRESHOLD",
     "RECOMMENDATIONS",
     "ThresholdOrderError",
     "Tier",
-    "VehicleRiskAnswer",
     "operating_thresholds",
     "recommendation",
     "tier_of",
     "TRIAGE_SOURCES",
-    "SensorInputs",
     "EngineModels",
-    "IssEstimate",
-    "ModelInfo",
-    "OccupantSimulation",
     "OccupantTriage",
     "TriageDecision",
     "TriageResult",
@@ -110,8 +91,6 @@ __all__ = [
     "warm_up",
     "occupant_evidence",
     "notification_field_inputs",
-    "OccupantEvidence",
-    "load_surrogates",
     "simulate_notification",
     "triage",
     "triage_code_sha256",

@@ -245,7 +245,7 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         },
         "lpm_code": {
             "version": "0.2.0",
-            "sha256": "d7d2e962acae0af7dc466db6c16982a9ea7ee84649f6c09669637503b15e5921",
+            "sha256": "dbcc944402a64c1f828bd136d690051c708445e1c2f29f2f40896c28d2100787",
         },
         "triage_code": {
             "version": "0.2.0",

@@ -1,4 +1,4 @@
-"""NEMSIS v3.5.1: every stored case as an EMS patient care record (issue 40).
+"""NEMSIS v3.5.1: every stored case as an EMS patient care record.
 
 - ``codes``: the NEMSIS code lists used and the element template of a report.
 - ``mapping``: a stored case -> an ``EMSDataSet`` document and its report.

@@ -1,4 +1,4 @@
-"""/docs has the pages' security headers; HSTS where TLS ends (issue 41)."""
+"""/docs has the pages' security headers; HSTS where TLS ends."""
 
 from __future__ import annotations
 

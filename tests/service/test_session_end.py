@@ -1,4 +1,4 @@
-"""Sign-out ends the session on the server: a kept copy of the cookie is refused (issue 41)."""
+"""Sign-out ends the session on the server: a kept copy of the cookie is refused."""
 
 from __future__ import annotations
 

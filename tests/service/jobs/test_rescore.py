@@ -1,4 +1,4 @@
-"""`aacn-triage cases rescore`: the model recall report (issue 32).
+"""`aacn-triage cases rescore`: the model recall report.
 
 A database holds cases decided by a retired field model, submitted through the
 real HTTP path: 1.0.0 (fitted on mph read as km/h), recalled with its refit
@@ -76,7 +76,7 @@ def _snapshot(api: ApiClient) -> list[tuple[Any, ...]]:
 
 
 def _submit_cases(api: ApiClient) -> dict[str, dict[str, Any]]:
-    """The summary notifications of DELTA_V_KMH, and one VEDS document (issue 34)."""
+    """The summary notifications of DELTA_V_KMH, and one VEDS document."""
     out = {}
     for i, dv in enumerate(DELTA_V_KMH):
         body = summary(dv, belted=i % 3 != 0, event_id=f"recall-{i}")

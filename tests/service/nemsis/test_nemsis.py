@@ -1,4 +1,4 @@
-"""NEMSIS v3.5.1 records of stored cases (issue 40): valid, faithful, guarded.
+"""NEMSIS v3.5.1 records of stored cases: valid, faithful, guarded.
 
 Every record is checked against the shipped XSDs with the service's own validator,
 which is shown to be real on NEMSIS's motor-vehicle-crash test case (it passes) and
@@ -157,7 +157,7 @@ def test_every_code_used_is_in_the_nemsis_code_list() -> None:
 
 
 def test_every_seat_of_the_contract_has_a_nemsis_seat() -> None:
-    # a seat added to the wire contract (issue 38: front middle, ...) must be mapped here
+    # a seat added to the wire contract (front middle, ...) must be mapped here
     assert {s.value for s in Seat} <= set(codes.SEAT_LOCATION)
     assert {s.value for s in Seat} <= set(codes.SEAT_ROW_LOCATION)
 
@@ -657,7 +657,7 @@ def test_the_case_page_links_the_record_and_its_session_opens_it(api: ApiClient)
     r = browser.get(link.attrs["href"], params=AGENCY)
     assert r.status_code == 200, r.text
     assert validate(r.content) == []
-    # a copy of the cookie kept after the sign-out opens nothing (issue 41)
+    # a copy of the cookie kept after the sign-out opens nothing
     replay = TestClient(api.client.app, base_url="https://testserver")
     kept = browser.cookies.get(SESSION_COOKIE)
     replay.cookies.set(SESSION_COOKIE, kept, domain="testserver.local", path="/v1")

@@ -443,7 +443,7 @@ def test_the_body_map_shows_region_risk_first_and_the_physics_layer_labelled(
 def test_a_56_kmh_near_side_case_shows_no_ais_6_and_says_why(
     served: Served, signed_in: Any
 ) -> None:
-    """Issue 39's case: a 56 km/h near-side crash with the side airbags deployed."""
+    """The body map's case: a 56 km/h near-side crash with the side airbags deployed."""
     tab = _tab(signed_in)
     page = tab.page
     page.goto(served.url("near-side-56"))

@@ -1,4 +1,4 @@
-"""The body map's two layers on the case page (issue 39, item 2), through the ASGI app.
+"""The body map's two layers on the case page, through the ASGI app.
 
 Layer one colours each AIS body region by the stored field region risk
 (``occupants[].region_risk.<region> = {probability, probability_ci95, ais_level}``);
