@@ -61,13 +61,11 @@ def main() -> None:
 
     from distributed import LocalCluster
 
-    from service.context import engine_models_for
     from service.jobs.batch import batch_record, run_batch
     from service.jobs.dask import triage_batch_on_dask
     from service.settings import get_settings
 
     settings = get_settings()
-    models = engine_models_for(settings)
     work = Path(tempfile.mkdtemp(prefix="bench-dask-"))
     src = work / "in.jsonl"
     src.write_text("".join(t + "\n" for t in _inputs(args.n)), encoding="utf-8")
@@ -96,7 +94,7 @@ def main() -> None:
                     out = work / f"{engine}-{workers}.jsonl"
                     t0 = time.perf_counter()
                     if engine == "pool":
-                        run_batch(src, out, models, resume=False, workers=workers)
+                        run_batch(src, out, settings, resume=False, workers=workers)
                     else:
                         on_dask(src, out)
                     elapsed = time.perf_counter() - t0
@@ -126,7 +124,7 @@ chunks of 64, ordered, written as they come back).
 {chr(10).join(rows)}
 
 2 workers / 1: pool {scale_pool:.2f}, Dask {scale_dask:.2f}. The answers are the same \
-(`tests/service/test_batch_dask.py`). How this grows on more machines: `docs/deploy.md`.
+(`tests/service/jobs/test_batch_dask.py`). How this grows on more machines: `docs/deploy.md`.
 """
     print(text)
     if not args.no_write:

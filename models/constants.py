@@ -17,6 +17,7 @@ G_MS2: Final[float] = 9.80665
 Z_95: Final[float] = 1.959963984540054
 
 #: Default sensor standard deviations: posture within 5 deg and seat position
-#: within 5 cm, 95 % of the time, Gaussian (issue 5): SD = bound / z95; deg, mm.
+#: within 5 cm, 95 % of the time, Gaussian (the sensors' stated bounds): SD = bound / z95;
+#: deg, mm.
 DEFAULT_POSTURE_SD_DEG: Final[float] = 5.0 / Z_95
 DEFAULT_SEAT_TRACK_SD_MM: Final[float] = 50.0 / Z_95

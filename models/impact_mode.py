@@ -1,7 +1,7 @@
 """Impact mode of each occupant from the principal direction of force.
 
 The occupant models cover the ranges of the reference paper
-(occupant-injury-framework-paper.txt, section 2.3; issue 2): frontal
+(occupant-injury-framework-paper.txt, section 2.3): frontal
 340-30 deg, rear 140-210 deg, near side 80-110 deg toward the occupant's side
 (250-280 deg for an occupant on the left), far side the mirror of near side.
 PDOF is in degrees clockwise from straight ahead (0 frontal, 90 right side,
@@ -39,7 +39,7 @@ class ImpactMode(StrEnum):
 
 #: Coverage of each mode as (start, end) deg clockwise, for an occupant seated
 #: on the right of the vehicle; the side ranges swap for an occupant on the
-#: left. Source: the reference paper's LPM coverage (issue 2).
+#: left. Source: the reference paper's LPM coverage.
 COVERAGE_DEG: dict[ImpactMode, tuple[float, float]] = {
     ImpactMode.FRONTAL: (340.0, 30.0),
     ImpactMode.NEAR_SIDE: (80.0, 110.0),

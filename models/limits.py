@@ -35,7 +35,8 @@ __all__ = [
 #: ``injury-criteria.md`` section 4; ``occupant-lpm-notes.md`` section 3).
 PULSE_CFC: Final[int] = 60
 
-#: Largest plausible delta-V, km/h (issue 2: "delta-V above 200 km/h" is refused).
+#: Largest plausible delta-V, km/h: a delta-V above 200 km/h is refused (a requirement
+#: of the service).
 MAX_DELTA_V_KMH: Final[float] = 200.0
 
 #: Largest acceleration magnitude in a record, g. [R] Vehicle crash pulses of

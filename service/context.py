@@ -124,7 +124,7 @@ class ServiceContext:
     models: EngineModels | None
     spool: Spool
     models_error: str | None = None
-    #: Signs the browser session cookies and CSRF tokens (``service.pages.session``).
+    #: Signs the browser session cookies and CSRF tokens (``service.browser_session``).
     session_secret: bytes = b""
     #: Where it came from (``service.session_secret.ORIGIN_*``), shown by /readyz.
     session_secret_origin: str = ""

@@ -1,8 +1,8 @@
 """Request-body JSON read strictly: duplicate keys and runaway nesting are refused.
 
 Python's ``json`` (and pydantic's parser) keep the last of two equal keys, so
-``{"delta_v_kmh": 500, "delta_v_kmh": 56}`` was triaged at 56 km/h while the
-audit copy held only one of the two values (issue 24, a fuzzing finding). The
+``{"delta_v_kmh": 500, "delta_v_kmh": 56}`` would be triaged at 56 km/h while the
+audit copy would hold only one of the two values (a fuzzing finding). The
 notification is therefore parsed here first, every object checked for repeated
 keys, and refused as malformed (400) before pydantic sees it.
 """

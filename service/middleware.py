@@ -22,7 +22,7 @@ class BodySizeLimit:
     A declared ``Content-Length`` over the limit is refused at once. A body without
     one (``Transfer-Encoding: chunked``) is read here up to the limit and handed on
     whole, so that it too gets the 413 problem instead of a parse error and a reset
-    connection (issue 24, a fuzzing finding).
+    connection (a fuzzing finding).
     """
 
     def __init__(self, app: ASGIApp, max_bytes: int) -> None:

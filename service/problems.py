@@ -28,7 +28,7 @@ from typing import Any
 from fastapi import FastAPI, Request
 from fastapi.exceptions import RequestValidationError
 from fastapi.responses import JSONResponse
-from pydantic import BaseModel, Field
+from pydantic import BaseModel, Field, ValidationError
 from sqlalchemy.exc import DBAPIError
 from sqlalchemy.exc import TimeoutError as PoolTimeoutError
 from starlette.exceptions import HTTPException as StarletteHTTPException
@@ -49,7 +49,11 @@ __all__ = [
     "Unauthorized",
     "UnsupportedMediaType",
     "UnprocessableNotification",
+    "empty_line_problem",
     "install_problem_handlers",
+    "malformed_json_problem",
+    "problem_from_domain_error",
+    "problem_from_validation",
     "problem_response",
 ]
 
@@ -228,6 +232,37 @@ def validation_errors(exc: RequestValidationError) -> list[FieldError]:
             FieldError(field=_field_path(err.get("loc", ())), reason=reason, type=str(err["type"]))
         )
     return out
+
+
+def problem_from_validation(exc: ValidationError) -> dict[str, Any]:
+    """A notification refused by the wire models, as the problem a batch line or a
+    command prints (422 with one entry per offending field, like the API's)."""
+    errors = validation_errors(RequestValidationError(exc.errors()))
+    return {
+        "title": "Invalid notification",
+        "status": 422,
+        "errors": [e.model_dump() for e in errors],
+    }
+
+
+def problem_from_domain_error(exc: DomainError) -> dict[str, Any]:
+    """A domain error as the problem of a batch line (the API answers it with a handler)."""
+    return {
+        "title": exc.title,
+        "status": exc.status,
+        "detail": exc.detail,
+        "errors": [e.model_dump() for e in exc.errors or []],
+    }
+
+
+def malformed_json_problem(reason: str) -> dict[str, Any]:
+    """A batch line that is not one JSON document with unique keys (400)."""
+    return {"title": "Malformed JSON", "status": 400, "detail": reason}
+
+
+def empty_line_problem() -> dict[str, Any]:
+    """A batch line with nothing on it."""
+    return {"title": "Empty line"}
 
 
 def install_problem_handlers(app: FastAPI) -> None:

@@ -81,12 +81,12 @@ class Settings(BaseSettings):
     posture_sd_deg: float = Field(
         default=DEFAULT_POSTURE_SD_DEG,
         gt=0.0,
-        description="Default posture sensor SD, deg: within 5 deg 95% of the time (issue 5).",
+        description="Default posture sensor SD, deg: within 5 deg 95% of the time.",
     )
     seat_track_sd_mm: float = Field(
         default=DEFAULT_SEAT_TRACK_SD_MM,
         gt=0.0,
-        description="Default seat position sensor SD, mm: within 5 cm 95% of the time (issue 5).",
+        description="Default seat position sensor SD, mm: within 5 cm 95% of the time.",
     )
     surrogate_dir: Path | None = Field(
         default=None,

@@ -7,3 +7,5 @@ from typing import Final
 
 #: The repository (the directory holding pyproject.toml).
 ROOT: Final[Path] = Path(__file__).resolve().parents[1]
+#: The VEDS test documents (``tests/service/cases/veds/``, with their provenance).
+VEDS_DOCS: Final[Path] = ROOT / "tests" / "service" / "cases" / "veds"

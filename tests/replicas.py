@@ -1,4 +1,4 @@
-"""Replicas behind nginx on one PostgreSQL, a replica killed mid-load (issue 33).
+"""Replicas behind nginx on one PostgreSQL, a replica killed mid-load.
 
 The plain-host recipe of ``docs/deploy.md``, run for real: ``aacn-triage serve``
 processes (one uvicorn worker each, their own spool, one numba cache) on free

@@ -1,8 +1,12 @@
 """The house: one-way imports, no cycles, a request path without the offline tools.
 
-The service's features (``docs/layout.md``): ``service/cases`` (the request path)
-imports none of ``service/pages``, ``service/jobs`` or ``service/cli``; only
-``service/cli/research.py`` and ``service/jobs`` import the offline tools; no module
+The service's rooms (``docs/layout.md``): a feature (``pages``, ``nemsis``, ``jobs``,
+``outcomes``, any package of ``service/`` but ``cases``, ``db`` and ``cli``) imports
+``cases``, ``db`` and the flat infrastructure, never another feature; the
+infrastructure imports no feature; ``cli/`` and ``app`` compose them all;
+``service/cases`` (the request path) imports none of ``service/pages``, ``service/jobs``
+or ``service/cli``; only
+the research commands (``service/cli/research*.py``) import the offline tools; no module
 but the app factory imports a router; one enum of impact modes; small modules and
 functions.
 
@@ -199,11 +203,15 @@ def _in(module: str, package: str) -> bool:
     return module == package or module.startswith(package + ".")
 
 
-def test_only_the_research_commands_and_the_jobs_import_the_offline_tools() -> None:
+#: The research command line: the only modules of the service that import the lab.
+RESEARCH_COMMANDS = ("service.cli.research", "service.cli.research_dask")
+
+
+def test_only_the_research_commands_import_the_offline_tools() -> None:
     bad = {
         (m, d)
         for m, deps in import_graph().items()
-        if _in(m, "service") and not (m == "service.cli.research" or _in(m, "service.jobs"))
+        if _in(m, "service") and m not in RESEARCH_COMMANDS
         for d in deps
         if _is_offline(d)
     }
@@ -232,6 +240,90 @@ def test_the_jobs_and_the_command_line_stay_off_the_request_path() -> None:
         or (_in(d, "service.cli") and not _in(m, "service.cli"))
     }
     assert not bad, sorted(bad)
+
+
+#: The packages of ``service/`` that are not features: the request path's core
+#: (``cases``), the store (``db``) and the command line (``cli``, a composition root).
+NOT_FEATURES = ("cases", "db", "cli")
+#: The composition roots: they put the features together, so they may import any.
+COMPOSITION_ROOTS = ("service.app", "service.cli")
+#: Edges between features or from the infrastructure to ``cases`` that stay, and why.
+ALLOWED_EDGES = {
+    # the OpenAPI document's part for POST /v1/cases: the route reads its body itself
+    # (JSON or VEDS XML), so FastAPI cannot see the body's model; the document names it,
+    # its examples and the XML media type from the cases
+    ("service.openapi", "service.cases"): "the document of the body POST /v1/cases reads",
+    # the quality page shows the outcomes' quality report: the dispatcher's pages are the
+    # one place a person reads it
+    ("service.pages", "service.outcomes"): "the quality page shows the outcomes' report",
+}
+
+
+def _service_packages() -> set[str]:
+    return {p.name for p in (ROOT / "service").iterdir() if (p / "__init__.py").is_file()}
+
+
+def _room(module: str, packages: set[str]) -> str:
+    """``feature:<name>``, ``cases``, ``db``, ``cli``, ``root`` or ``infrastructure``."""
+    parts = module.split(".")
+    if module in COMPOSITION_ROOTS or _in(module, "service.cli"):
+        return "root"
+    if len(parts) >= 2 and parts[1] in packages:
+        return parts[1] if parts[1] in NOT_FEATURES else f"feature:{parts[1]}"
+    return "infrastructure"
+
+
+def feature_violations(graph: dict[str, set[str]], packages: set[str]) -> set[tuple[str, str]]:
+    """The edges that break the rooms' rule.
+
+    A feature (a package of ``service/`` other than ``cases``, ``db`` and ``cli``)
+    imports ``cases``, ``db`` and the infrastructure (the flat modules of ``service/``),
+    never another feature or the command line. The infrastructure imports no feature
+    (nor ``cases``). ``cli/`` and ``app`` are the composition roots: they import any.
+    An edge of :data:`ALLOWED_EDGES` (by package) stays, with its reason.
+    """
+    bad = set()
+    for m, deps in graph.items():
+        if not _in(m, "service") or m == "service":
+            continue
+        here = _room(m, packages)
+        for d in deps:
+            if not _in(d, "service") or d == "service":
+                continue
+            there = _room(d, packages)
+            if here == "root" or there == here or there in ("db", "infrastructure"):
+                continue
+            if there == "cases" and here.startswith("feature:"):
+                continue
+            if any(_in(m, a) and _in(d, b) for a, b in ALLOWED_EDGES):
+                continue
+            bad.add((m, d))
+    return bad
+
+
+def test_a_feature_imports_no_other_feature_and_the_infrastructure_none() -> None:
+    bad = feature_violations(import_graph(), _service_packages())
+    assert not bad, sorted(bad)
+
+
+def test_the_rooms_rule_can_fail() -> None:
+    """A deliberate violation of each kind is caught (the check is not vacuous)."""
+    packages = {"cases", "db", "cli", "pages", "nemsis", "jobs"}
+    graph = {
+        "service.nemsis.endpoints": {"service.pages.views", "service.cases.result"},
+        "service.jobs.batch": {"service.cli.common", "service.db.repository"},
+        "service.auth": {"service.pages.endpoints", "service.problems"},
+        "service.metrics": {"service.cases.service"},
+        "service.cli.main": {"service.nemsis.export", "service.jobs.batch"},
+        "service.app": {"service.pages.endpoints"},
+    }
+    assert feature_violations(graph, packages) == {
+        ("service.nemsis.endpoints", "service.pages.views"),
+        ("service.jobs.batch", "service.cli.common"),
+        ("service.auth", "service.pages.endpoints"),
+        ("service.metrics", "service.cases.service"),
+    }
+    assert {"pages", "nemsis", "jobs", "outcomes"} <= _service_packages() - set(NOT_FEATURES)
 
 
 def test_no_module_but_the_app_imports_a_router() -> None:

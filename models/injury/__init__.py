@@ -1,4 +1,4 @@
-"""Injury criteria, risk curves, AIS and ISS (issue 3).
+"""Injury criteria, risk curves, AIS and ISS; the limits shown beside the measures.
 
 Layout::
 

@@ -365,25 +365,6 @@ def _hic_search(cum: npt.NDArray[np.float64], dt: float, nmax: int) -> tuple[flo
     return best2, bi, bj
 
 
-@njit(cache=True)
-def _hic_search_exhaustive(
-    cum: npt.NDArray[np.float64], dt: float, nmax: int
-) -> tuple[float, int, int]:
-    """The reference of :func:`_hic_search`: every start evaluated (tests only)."""
-    n = cum.shape[0]
-    inv_t3 = _inv_cubes(dt, nmax)
-    best2 = 0.0
-    bi = 0
-    bj = 0
-    for i in range(n - 1):
-        local, lj = _hic_window_from(cum, inv_t3, i, nmax)
-        if local > best2:
-            best2 = local
-            bi = i
-            bj = lj
-    return best2, bi, bj
-
-
 def hic(
     resultant_accel_g: npt.ArrayLike, sample_rate_hz: float, max_window_ms: float = 15.0
 ) -> HicResult:

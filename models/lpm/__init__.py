@@ -1,4 +1,4 @@
-"""Occupant engine: four 2-D lumped parameter models (issue 4).
+"""Occupant engine: four 2-D lumped parameter models.
 
 Public API: :func:`models.lpm.simulate.simulate`, :class:`models.lpm.simulate.LpmResult`,
 :func:`models.lpm.simulate.warm_up`, :func:`models.lpm.params.load_parameter_set`,

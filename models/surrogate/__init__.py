@@ -1,4 +1,4 @@
-"""Polynomial chaos surrogates of the occupant LPMs (issue 5).
+"""Polynomial chaos surrogates of the occupant LPMs.
 
 Offline, :mod:`models.offline.surrogate.build` (``aacn-triage build-surrogates``) runs
 the LPMs on Latin hypercube designs and fits sparse arbitrary PCEs with 150

@@ -4,7 +4,7 @@
 :meth:`SurrogateFamily.propagate` turns the occupant sensor uncertainty into
 95% intervals in a few milliseconds, with all bootstrap replicates.
 
-Propagation (reference paper section 2.5; issue 5)
+Propagation (reference paper section 2.5)
 ----------------------------------------------------
 * Sensor errors: posture and seat track readings are Gaussian with the given
   standard deviations (service default: 5 deg and 50 mm at 95%, i.e.

@@ -200,7 +200,7 @@ class SurrogateFamily:
             # one BLAS thread, whatever the caller's setting: OpenBLAS splits these
             # products (hundreds of held-out runs) by thread count, which moved the
             # factors in the last bits, and with them the intervals of every answer
-            # (tests/service/test_determinism.py: a process that loaded the models
+            # (tests/service/cases/test_determinism.py: a process that loaded the models
             # before capping its threads answered differently from one that did not)
             with threadpool_limits(limits=1, user_api="blas"):
                 raw = self._raw_all(hx)  # once for both calibrations

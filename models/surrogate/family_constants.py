@@ -19,7 +19,7 @@ _Z95: Final[float] = Z_95
 
 
 #: Default posture sensor standard deviation, deg: error within 5 deg 95% of the
-#: time, Gaussian (reference paper section 2.5; issue 5).
+#: time, Gaussian (reference paper section 2.5).
 DEFAULT_POSTURE_SD_DEG: Final[float] = 5.0 / _Z95
 
 

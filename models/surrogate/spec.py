@@ -309,7 +309,7 @@ P_RESOLUTION: Final[float] = 2.0 * LOGIT_CLIP
 #: (models.offline.surrogate.build, :data:`DELTA_V_PIECES_KMH` for the measurements).
 HEAD_CLEARANCE: Final[str] = "head_clearance_mm"
 
-#: Accuracy targets of the surrogates against direct LPM runs (issue 5): the
+#: Accuracy targets of the surrogates against direct LPM runs (the project's): the
 #: median relative error of every measure, per family, below
 #: MEDIAN_ERROR_TARGET, and the ISS15+ decision agreement (P(ISS >= 15) on the
 #: same side of 0.5) above AGREEMENT_TARGET, per family and pooled.

@@ -25,24 +25,11 @@ Everything here is a pure function of the notification and the loaded models:
 the same inputs and model versions give the same result, bit for bit (only
 `timings_ms` varies).
 
-Layout (one face: import from ``models.triage``, not from its modules)::
-
-    result.py          the answer's types: TriageResult, OccupantTriage, TriageDecision, ...
-    loading.py         EngineModels, load_engine_models, warm_up; the triage_code checksum
-    decision.py        decide: a probability at a threshold (with its tier for the field
-                       decision); the field, occupant-model and baseline decisions; the
-                       case's is the worst occupant's
-    occupant_model.py  the occupant-model explanation: direct runs, injury scores, intervals
-    field_evidence.py  what the field model is given per occupant (also for offline fits)
-    run.py             triage: the notification -> result orchestration
-    simulation.py      simulate_notification: full time histories, for the command line's
-                       ``simulate`` and the offline checks (not the request path)
-
-Imports run one way down the list (result <- loading <- decision <- occupant_model <-
-field_evidence <- run; simulation beside run).
+One face: import from ``models.triage``, not from its modules (each is listed in
+``docs/layout.md``). Imports run one way: result <- loading <- decision <-
+occupant_model <- field_evidence <- run; simulation beside run.
 """
 
-from models.constants import DEFAULT_POSTURE_SD_DEG, DEFAULT_SEAT_TRACK_SD_MM
 from models.tiers import (
     HIGH_RISK_THRESHOLD,
     RECOMMENDATIONS,
@@ -52,12 +39,10 @@ from models.tiers import (
     tier_of,
 )
 from models.triage.decision import (
-    BASELINE_OUTCOME,
     LPM_THRESHOLDS,
     decide,
 )
 from models.triage.field_evidence import (
-    OccupantEvidence,
     notification_field_inputs,
     occupant_evidence,
 )
@@ -65,54 +50,38 @@ from models.triage.loading import (
     TRIAGE_SOURCES,
     EngineModels,
     load_engine_models,
-    load_surrogates,
     operating_thresholds,
     triage_code_sha256,
     warm_up,
 )
 from models.triage.result import (
-    LPM_OUTCOME,
     IntervalMethod,
-    IssEstimate,
     Method,
-    ModelInfo,
     OccupantTriage,
-    SensorInputs,
     TriageDecision,
     TriageResult,
     UnknownVehicleModel,
-    VehicleRiskAnswer,
 )
 from models.triage.run import (
     triage,
 )
 from models.triage.simulation import (
-    OccupantSimulation,
     simulate_notification,
 )
 
 __all__ = [
-    "DEFAULT_POSTURE_SD_DEG",
-    "DEFAULT_SEAT_TRACK_SD_MM",
     "LPM_THRESHOLDS",
-    "LPM_OUTCOME",
-    "BASELINE_OUTCOME",
     "IntervalMethod",
     "Method",
     "HIGH_RISK_THRESHOLD",
     "RECOMMENDATIONS",
     "ThresholdOrderError",
     "Tier",
-    "VehicleRiskAnswer",
     "operating_thresholds",
     "recommendation",
     "tier_of",
     "TRIAGE_SOURCES",
-    "SensorInputs",
     "EngineModels",
-    "IssEstimate",
-    "ModelInfo",
-    "OccupantSimulation",
     "OccupantTriage",
     "TriageDecision",
     "TriageResult",
@@ -122,8 +91,6 @@ __all__ = [
     "warm_up",
     "occupant_evidence",
     "notification_field_inputs",
-    "OccupantEvidence",
-    "load_surrogates",
     "simulate_notification",
     "triage",
     "triage_code_sha256",

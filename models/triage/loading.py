@@ -51,13 +51,11 @@ __all__ = [
 #: with every case (``triage_code``), beside those of the models they call. The
 #: package ``models/triage/`` counts whole: every module of it but its face
 #: (``__init__``, re-exports only) and ``simulation.py`` (not on the answer's path),
-#: in this fixed order (tests/models/test_triage.py checks that none is left out).
-#: Since the package was split from one ``triage.py`` (issue 37) the checksum differs
-#: from the one cases stored before the split record: those keep theirs (a record of
-#: the code that answered them), the code's behaviour is unchanged. The field risk
-#: model's evaluators (``field/risk_model.py``, ``field/boosted.py``) count too since
-#: field model 3.1.0: its artifact names the model, this the code that evaluates it; and
-#: since 3.3.0 the integration over unknown inputs and the delta-V measurement model.
+#: in this fixed order (tests/models/triage/test_triage.py checks that none is left out).
+#: A stored case keeps the checksum of the code that answered it. The field risk
+#: model's evaluators (``field/risk_model.py``, ``field/boosted.py``) count: its
+#: artifact names the model, this the code that evaluates it; so do the integration
+#: over unknown inputs and the delta-V measurement model.
 TRIAGE_SOURCES = (
     "triage/result.py",
     "triage/loading.py",

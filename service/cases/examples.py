@@ -245,11 +245,11 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         },
         "lpm_code": {
             "version": "0.2.0",
-            "sha256": "d7d2e962acae0af7dc466db6c16982a9ea7ee84649f6c09669637503b15e5921",
+            "sha256": "dbcc944402a64c1f828bd136d690051c708445e1c2f29f2f40896c28d2100787",
         },
         "triage_code": {
             "version": "0.2.0",
-            "sha256": "aad8764769a9b081e299640efd80c2ae5336837fdb1ec03bb002a8c869fa047a",
+            "sha256": "ba6eaaf1a72caf0b0eacb900d9218efe21b6169716ef53ad8f424c275c2114cc",
         },
         "risk_calibration": {
             "version": "1",

@@ -100,7 +100,7 @@ def notification_sha256(notification: CrashNotificationIn, *, with_time: bool = 
     The canonical JSON of the validated notification: every default written out,
     numbers as the floats they are (``56`` and ``56.0`` alike, ``-0.0`` as ``0.0``),
     the crash time in UTC. Two bodies that validate to the same notification are the
-    same body (issue 24: they used to conflict with 409). A VEDS document maps to a
+    same body (a replay, not a 409 conflict). A VEDS document maps to a
     notification and is fingerprinted as that notification, so a re-sent document,
     or the JSON of the same meaning, replays.
 
@@ -258,6 +258,33 @@ def _case_rows(
     return case, record
 
 
+def _add_case(ctx: ServiceContext, case: Case, record: IdempotencyRecord) -> IntegrityError | None:
+    """Store a case and its idempotency record in one transaction.
+
+    Returns None when stored, or the ``IntegrityError`` of a case whose (client,
+    event_id) may have been committed first (:func:`_committed_first` finds it). The
+    store's own errors (:data:`STORE_ERRORS`) are raised: each caller has its answer.
+    """
+    try:
+        with ctx.sessions.begin() as session:
+            repository.add_case(session, case, record)
+    except IntegrityError as exc:
+        return exc
+    return None
+
+
+def _committed_first(
+    ctx: ServiceContext, conflict: IntegrityError, client_name: str, event_id: str
+) -> IdempotencyRecord:
+    """The idempotency record committed first for (client, event_id); raises `conflict`
+    when there is none (the store refused the case for another reason)."""
+    with ctx.sessions() as session:
+        existing = repository.get_idempotency_record(session, client_name, event_id)
+    if existing is None:
+        raise conflict
+    return existing
+
+
 def store_spooled(ctx: ServiceContext, entry: SpoolEntry) -> None:
     """Store one spooled case (the replayer's step); "already stored" counts as done.
 
@@ -279,13 +306,12 @@ def store_spooled(ctx: ServiceContext, entry: SpoolEntry) -> None:
         source=entry.source,
     )
     try:
-        with ctx.sessions.begin() as session:
-            repository.add_case(session, case, record)
-    except IntegrityError:
-        with ctx.sessions() as session:
-            existing = repository.get_idempotency_record(session, entry.client_name, entry.event_id)
-        if existing is None:
-            raise
+        conflict = _add_case(ctx, case, record)
+    except STORE_ERRORS:
+        ctx.reset_store_connections()
+        raise
+    if conflict is not None:
+        existing = _committed_first(ctx, conflict, entry.client_name, entry.event_id)
         if existing.case_id != entry.case_id:
             # stored before the outage and re-sent while the store could not be read:
             # the store keeps its case, the spooled duplicate is dropped
@@ -294,9 +320,6 @@ def store_spooled(ctx: ServiceContext, entry: SpoolEntry) -> None:
                 extra={"case_id": entry.case_id, "stored_case_id": existing.case_id},
             )
         return
-    except STORE_ERRORS:
-        ctx.reset_store_connections()
-        raise
     ctx.metrics.spool_replayed.inc()
 
 
@@ -360,7 +383,7 @@ def submit(
         raise RuntimeError("models are not loaded")
     time_is_senders = source is None or not source.occurred_at_assumed
     fingerprint = notification_sha256(notification, with_time=time_is_senders)
-    # cases stored before issue 24 carry the fingerprint of the document as received
+    # a case may also carry the fingerprint of its document as received (the older rule)
     fingerprints = (fingerprint, canonical_sha256(document))
     store_up = True
     try:
@@ -418,17 +441,7 @@ def submit(
         source=entry.source,
     )
     try:
-        with ctx.sessions.begin() as session:
-            repository.add_case(session, case, record)
-    except IntegrityError:
-        # A concurrent request with the same (client, event_id) committed first.
-        with ctx.sessions() as session:
-            existing = repository.get_idempotency_record(
-                session, caller.name, notification.event_id
-            )
-        if existing is None:
-            raise
-        return _replay_or_conflict(existing, fingerprints, ctx)
+        conflict = _add_case(ctx, case, record)
     except STORE_ERRORS as exc:
         log.warning(
             "the store failed; the case goes to the spool",
@@ -436,6 +449,9 @@ def submit(
         )
         ctx.reset_store_connections()
         return _spool(ctx, entry, fingerprint, result)
+    if conflict is not None:  # a concurrent request with the same event committed first
+        existing = _committed_first(ctx, conflict, caller.name, notification.event_id)
+        return _replay_or_conflict(existing, fingerprints, ctx)
     decision = "iss15_plus" if result.triage.iss15_plus else "not_iss15_plus"
     methods = {o.method for o in result.occupants}
     method = Method.LPM if Method.LPM in methods else Method.FIELD

@@ -24,7 +24,7 @@ Commands::
 
 Layout: :mod:`service.cli.operate` (operator commands), :mod:`service.cli.research`
 (hand-overs to the offline tools), :mod:`service.cli.common` (shared helpers); batch
-work in :mod:`service.jobs`; ``cases export --nemsis`` in :mod:`service.nemsis.command`.
+work in :mod:`service.jobs`; ``cases export --nemsis`` in :mod:`service.cli.export`.
 """
 
 from __future__ import annotations
@@ -33,6 +33,8 @@ import argparse
 import sys
 from collections.abc import Sequence
 
+from service.cli import export as nemsis_export
+from service.cli import outcomes as outcomes_command
 from service.cli.operate import cmd_cases, cmd_db, cmd_keys, cmd_serve, cmd_triage
 from service.cli.research import (
     HANDED_OVER,
@@ -41,8 +43,6 @@ from service.cli.research import (
     cmd_handed_over,
     cmd_simulate,
 )
-from service.nemsis import command as nemsis_command
-from service.outcomes import command as outcomes_command
 
 __all__ = ["build_parser", "main"]
 
@@ -150,8 +150,8 @@ def build_parser() -> argparse.ArgumentParser:
         "--operating-point", help="operating point (default AACN_OPERATING_POINT or the model's)"
     )
     cases.set_defaults(func=cmd_cases)
-    nemsis_command.add_parser(cases_sub)  # cases export --nemsis (service/nemsis/command.py)
-    outcomes_command.add_parser(sub)  # outcomes import|recalibrate (service/outcomes/command.py)
+    nemsis_export.add_parser(cases_sub)  # cases export --nemsis (service/cli/export.py)
+    outcomes_command.add_parser(sub)  # outcomes import|recalibrate (service/cli/outcomes.py)
 
     for command, (_, text) in HANDED_OVER.items():
         handed = sub.add_parser(command, help=text, add_help=False)

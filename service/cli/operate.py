@@ -10,10 +10,14 @@ import shutil
 import sys
 import tempfile
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from service.cli.common import echo, load_settings, open_sessions
 from service.jobs.batch import batch_record, evaluate_text, run_batch
+from service.jobs.worker import models_for
+
+if TYPE_CHECKING:
+    from sqlalchemy.orm import Session, sessionmaker
 
 __all__ = ["cmd_serve", "cmd_db", "cmd_keys", "cmd_cases", "cmd_triage"]
 
@@ -103,10 +107,14 @@ def cmd_db(args: argparse.Namespace) -> int:
 
 
 def cmd_keys(args: argparse.Namespace) -> int:
+    with open_sessions() as sessions:
+        return _keys(args, sessions)
+
+
+def _keys(args: argparse.Namespace, sessions: sessionmaker[Session]) -> int:
     from service.auth import Role, create_api_key, revoke_api_key, rotate_api_key
     from service.db import repository
 
-    sessions = open_sessions()
     if args.keys_command == "create":
         try:
             row, secret = create_api_key(sessions, name=args.name, role=Role(args.role))
@@ -165,8 +173,10 @@ def cmd_cases(args: argparse.Namespace) -> int:
     except ValueError as exc:
         echo(f"error: {exc}", err=True)
         return 2
-    sessions = open_sessions()
-    with tqdm(desc="cases rescored", unit="case", file=sys.stderr) as bar:
+    with (
+        open_sessions() as sessions,
+        tqdm(desc="cases rescored", unit="case", file=sys.stderr) as bar,
+    ):
         report = rescore(sessions, models, progress=bar.update)
     changed = report.changed
     out = write_csv(report.rows if args.all else changed, Path(args.out))
@@ -196,13 +206,12 @@ def _decision(flagged: bool) -> str:
 
 
 def cmd_triage(args: argparse.Namespace) -> int:
-    from service.context import engine_models_for
-
     if args.batch is not None and args.scheduler:  # on a Dask cluster (service.jobs.dask)
         return _run_batch_on_dask(args)
 
+    settings = load_settings()
     try:
-        models = engine_models_for(load_settings())
+        models = models_for(settings)
     except ValueError as exc:
         echo(f"error: the models failed to load: {exc}", err=True)
         return 1
@@ -212,10 +221,10 @@ def cmd_triage(args: argparse.Namespace) -> int:
             return 2
         text = Path(args.file).read_text(encoding="utf-8")
         outcome = evaluate_text(text, models, reproducible=args.reproducible)
-        if "error" in outcome:
-            echo(json.dumps(outcome["error"], indent=2), err=True)
+        if outcome.problem is not None:
+            echo(json.dumps(outcome.problem, indent=2), err=True)
             return 1
-        echo(json.dumps(outcome["result"], indent=2))
+        echo(json.dumps(outcome.result, indent=2))
         return 0
     if args.out is None:
         echo("error: --batch needs --out OUT.jsonl", err=True)
@@ -224,7 +233,7 @@ def cmd_triage(args: argparse.Namespace) -> int:
     return run_batch(
         Path(args.batch),
         Path(args.out),
-        models,
+        settings,
         resume=args.resume,
         workers=workers,
         reproducible=args.reproducible,

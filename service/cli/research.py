@@ -1,5 +1,5 @@
 """Research hand-overs: evaluate, simulate, baseline fit and the offline tools' own
-commands (the only command-line module that imports ``models.offline``)."""
+commands (with ``research_dask``, the only modules that import ``models.offline``)."""
 
 from __future__ import annotations
 
@@ -11,7 +11,6 @@ from typing import Any
 from pydantic import ValidationError
 
 from service.cli.common import echo, load_settings
-from service.jobs.batch import problem_from_validation
 
 __all__ = ["HANDED_OVER", "cmd_evaluate", "cmd_simulate", "cmd_handed_over", "cmd_baseline"]
 
@@ -106,8 +105,8 @@ def cmd_evaluate(args: argparse.Namespace) -> int:
     if not labelled:
         echo("error: no labelled notification to score", err=True)
         return 1
-    if args.scheduler:  # on a Dask cluster (service.jobs.dask)
-        from service.jobs.dask import evaluate_on_dask
+    if args.scheduler:  # on a Dask cluster (service.cli.research_dask)
+        from service.cli.research_dask import evaluate_on_dask
 
         cases = evaluate_on_dask(
             labelled, scheduler=args.scheduler, operating_point=args.operating_point
@@ -130,6 +129,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
     from models.offline.lpm.plot import plot_simulation
     from models.triage import UnknownVehicleModel, load_engine_models, simulate_notification
     from service.cases.notification import CrashNotificationIn
+    from service.problems import problem_from_validation
 
     load_settings()
     try:

@@ -168,7 +168,7 @@ class HealthProbe(Base):
 
 
 class EndedSession(Base):
-    """A browser session ended by its sign-out (``service.pages.session_end``).
+    """A browser session ended by its sign-out (``service.browser_session_end``).
 
     Its cookie is refused until it would have expired; then the row may go.
     """

@@ -3,69 +3,66 @@ line, in input order, resumable, on a pool of processes (never on the request pa
 
 from __future__ import annotations
 
+import functools
 import json
 import sys
+from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from pydantic import ValidationError
 
-__all__ = [
-    "BATCH_CHUNK",
-    "batch_record",
-    "evaluate_text",
-    "init_batch_worker",
-    "problem_from_validation",
-    "run_batch",
-]
+from service.jobs.worker import BatchLine, models_for
+
+if TYPE_CHECKING:
+    from models.triage import EngineModels
+    from service.settings import Settings
+
+__all__ = ["BATCH_CHUNK", "Evaluation", "batch_record", "evaluate_text", "run_batch"]
 
 
-def problem_from_validation(exc: ValidationError) -> dict[str, Any]:
-    from fastapi.exceptions import RequestValidationError
+@dataclass(frozen=True, slots=True)
+class Evaluation:
+    """The answer to one notification's text: its result, or the problem that refused it.
 
-    from service.problems import validation_errors
+    Exactly one of the two is set; both are the JSON forms a batch line holds.
+    """
 
-    errors = validation_errors(RequestValidationError(exc.errors()))
-    return {
-        "title": "Invalid notification",
-        "status": 422,
-        "errors": [e.model_dump() for e in errors],
-    }
+    result: dict[str, Any] | None = None
+    problem: dict[str, Any] | None = None
+
+    def fields(self) -> dict[str, Any]:
+        """``{"result": ...}`` or ``{"error": problem}``: the line's own fields."""
+        return {"result": self.result} if self.problem is None else {"error": self.problem}
 
 
-def evaluate_text(text: str, models: Any, *, reproducible: bool = False) -> dict[str, Any]:
-    """One notification (JSON text) -> {"result": ...} or {"error": problem}."""
+def evaluate_text(text: str, models: EngineModels, *, reproducible: bool = False) -> Evaluation:
+    """One notification (JSON text) -> its result, or the problem that refused it."""
     from service.cases.notification import CrashNotificationIn
     from service.cases.service import evaluate
     from service.jsonbody import MalformedJson
-    from service.problems import DomainError
+    from service.problems import (
+        DomainError,
+        malformed_json_problem,
+        problem_from_domain_error,
+        problem_from_validation,
+    )
 
     try:
         notification, _ = CrashNotificationIn.from_json(text)
     except MalformedJson as exc:
-        return {"error": {"title": "Malformed JSON", "status": 400, "detail": str(exc)}}
+        return Evaluation(problem=malformed_json_problem(str(exc)))
     except ValidationError as exc:
-        return {"error": problem_from_validation(exc)}
+        return Evaluation(problem=problem_from_validation(exc))
     try:
         received_at = notification.occurred_at if reproducible else datetime.now(UTC)
         result = evaluate(notification, models, case_id=None, received_at=received_at)
     except DomainError as exc:
-        return {
-            "error": {
-                "title": exc.title,
-                "status": exc.status,
-                "detail": exc.detail,
-                "errors": [e.model_dump() for e in exc.errors or []],
-            }
-        }
+        return Evaluation(problem=problem_from_domain_error(exc))
     if reproducible:  # nothing of the run itself: the same input gives the same bytes
         result = result.model_copy(update={"timings_ms": {}})
-    return {"result": result.model_dump(mode="json")}
-
-
-#: The engine models of a batch worker process (loaded once by `init_batch_worker`).
-_BATCH_MODELS: Any = None
+    return Evaluation(result=result.model_dump(mode="json"))
 
 
 #: Lines handed to a batch worker at a time. [R] Big enough that the pool's IPC is
@@ -73,24 +70,14 @@ _BATCH_MODELS: Any = None
 BATCH_CHUNK = 8
 
 
-#: Whether the batch of this process is reproducible (`triage --reproducible`).
-_BATCH_REPRODUCIBLE = False
+def _batch_line(settings: Settings, reproducible: bool, item: tuple[int, str]) -> BatchLine:
+    """A pool worker's task: one line, with this process's models for `settings`."""
+    return batch_record(*item, models_for(settings), reproducible=reproducible)
 
 
-def init_batch_worker(reproducible: bool = False) -> None:
-    global _BATCH_MODELS, _BATCH_REPRODUCIBLE
-    from service.context import engine_models_for
-    from service.settings import get_settings
-
-    _BATCH_MODELS = engine_models_for(get_settings())
-    _BATCH_REPRODUCIBLE = reproducible
-
-
-def _batch_line(item: tuple[int, str]) -> str:
-    return batch_record(*item, _BATCH_MODELS, reproducible=_BATCH_REPRODUCIBLE)
-
-
-def batch_record(number: int, text: str, models: Any, *, reproducible: bool = False) -> str:
+def batch_record(
+    number: int, text: str, models: EngineModels, *, reproducible: bool = False
+) -> BatchLine:
     """One output line of a batch: the answer to input line `number`, or its error.
 
     With `reproducible`, ``received_at`` is the crash's time and there are no
@@ -98,17 +85,20 @@ def batch_record(number: int, text: str, models: Any, *, reproducible: bool = Fa
     input and model versions give the same bytes on any machine, pool or cluster
     (a recall or a study can be re-run and compared with ``cmp``).
     """
+    from service.problems import empty_line_problem
+
     if not text.strip():
-        record: dict[str, Any] = {"line": number, "error": {"title": "Empty line"}}
+        evaluation = Evaluation(problem=empty_line_problem())
     else:
-        record = {"line": number, **evaluate_text(text, models, reproducible=reproducible)}
-    return json.dumps(record, separators=(",", ":"))
+        evaluation = evaluate_text(text, models, reproducible=reproducible)
+    record = {"line": number, **evaluation.fields()}
+    return BatchLine(json.dumps(record, separators=(",", ":")), evaluation.problem is not None)
 
 
 def run_batch(
     src: Path,
     out: Path,
-    models: Any,
+    settings: Settings,
     *,
     resume: bool,
     workers: int = 1,
@@ -116,6 +106,7 @@ def run_batch(
 ) -> int:
     """Evaluate a JSONL file into OUT (one line per input line, in order).
 
+    The engine models are this process's for `settings` (``service.jobs.worker``).
     With `workers` > 1 the lines are triaged by a pool of processes (forked from this
     one with its loaded models where the platform forks; else spawned, each loading
     them once from the shared numba cache) and written back in input order. With
@@ -127,8 +118,6 @@ def run_batch(
 
     from tqdm import tqdm
 
-    global _BATCH_MODELS, _BATCH_REPRODUCIBLE
-
     from service.jobs.io import keep_complete_lines, read_texts
 
     lines = read_texts(src)  # JSON Lines or Parquet (service.jobs.io)
@@ -136,31 +125,25 @@ def run_batch(
     failures = 0
     todo = list(enumerate(lines[done:], start=done + 1))
     workers = max(1, min(workers, len(todo)))
+    task = functools.partial(_batch_line, settings, reproducible)
+    models_for(settings)  # loaded here: forked workers inherit them
     with (
         out.open("a", encoding="utf-8") as sink,
         tqdm(total=len(lines), initial=done, unit="case", file=sys.stderr, desc="triage") as bar,
     ):
-        _BATCH_MODELS = models
-        _BATCH_REPRODUCIBLE = reproducible
         if workers == 1:
-            results: Any = map(_batch_line, todo)
+            results: Any = map(task, todo)
             pool = None
-        elif "fork" in multiprocessing.get_all_start_methods():
-            # forked workers inherit the loaded, warmed models: no start-up per worker
-            pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context("fork"))
-            results = pool.map(_batch_line, todo, chunksize=BATCH_CHUNK)
-        else:  # spawned workers load the models once each, from the shared numba cache
-            pool = ProcessPoolExecutor(
-                workers,
-                mp_context=multiprocessing.get_context("spawn"),
-                initializer=init_batch_worker,
-                initargs=(reproducible,),
-            )
-            results = pool.map(_batch_line, todo, chunksize=BATCH_CHUNK)
+        else:
+            # forked workers inherit the loaded, warmed models: no start-up per worker;
+            # spawned ones load them once each, from the shared numba cache
+            method = "fork" if "fork" in multiprocessing.get_all_start_methods() else "spawn"
+            pool = ProcessPoolExecutor(workers, mp_context=multiprocessing.get_context(method))
+            results = pool.map(task, todo, chunksize=BATCH_CHUNK)
         try:
             for line in results:
-                failures += '"error":' in line[:40]
-                sink.write(line + "\n")
+                failures += line.refused
+                sink.write(line.text + "\n")
                 sink.flush()
                 bar.update(1)
         finally:

@@ -1,14 +1,16 @@
-"""The batch commands on a Dask cluster (``--scheduler tcp://host:8786``).
+"""The batch on a Dask cluster (``--scheduler tcp://host:8786``).
 
-``aacn-triage triage --batch IN --out OUT --scheduler ADDR`` and ``aacn-triage
-evaluate FILE --scheduler ADDR`` hand their notifications to the workers of a
-``dask.distributed`` scheduler in chunks of :data:`CHUNK_LINES`, keep at most
+``aacn-triage triage --batch IN --out OUT --scheduler ADDR`` hands its
+notifications to the workers of a ``dask.distributed`` scheduler in chunks of
+:data:`CHUNK_LINES`, keep at most
 :data:`TASKS_PER_THREAD` chunks in flight per worker thread (so that an input of
 millions of lines is never held whole, here or on the cluster), and take the
 answers back in input order: the output is the local pool's, line for line. Every
 worker process loads the engine models once (from its numba cache) for the
 settings the command was given, which travel with each task, so the workers'
-own ``AACN_*`` environment does not change the answers.
+own ``AACN_*`` environment does not change the answers. The research command's
+``evaluate --scheduler`` uses the same client and window
+(``service.cli.research_dask``).
 
 A worker must have this package installed at the same version with the ``dask``
 extra (``pip install 'aacn-triage[dask]'``). Dask is imported here only, and
@@ -18,20 +20,18 @@ this module only by those commands: the service never imports Dask.
 from __future__ import annotations
 
 import sys
-import threading
 from collections import deque
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from service.jobs.io import count_items, iter_chunks, keep_complete_lines
+from service.jobs.worker import BatchLine, models_for
 
 if TYPE_CHECKING:
-    from models.notification import CrashNotification
-    from models.offline.field.evaluate import ScoredCase
     from service.settings import Settings
 
-__all__ = ["CHUNK_LINES", "TASKS_PER_THREAD", "evaluate_on_dask", "triage_batch_on_dask"]
+__all__ = ["CHUNK_LINES", "TASKS_PER_THREAD", "connect", "in_order", "triage_batch_on_dask"]
 
 #: Notifications per Dask task. [R] At ~5-50 ms of engine time each, a task takes
 #: 0.3-3 s: long beside the scheduler's ~1 ms per task and the shipping of ~100 kB of
@@ -43,39 +43,20 @@ TASKS_PER_THREAD = 3
 #: Bound on connecting to the scheduler, s.
 CONNECT_TIMEOUT_S = 30.0
 
-#: One line of a batch answer: (line number, text, engine models) -> JSON text.
-Record = Callable[[int, str, Any], str]
-
-#: The engine models of this worker process, by the settings they were loaded for.
-_MODELS: dict[str, Any] = {}
-_MODELS_LOCK = threading.Lock()
+#: One line of a batch answer: (line number, text, engine models) -> the line.
+Record = Callable[[int, str, Any], BatchLine]
 
 
-def _models_for(settings: Settings) -> Any:
-    from service.context import engine_models_for
-
-    key = settings.model_dump_json()
-    with _MODELS_LOCK:
-        if key not in _MODELS:
-            _MODELS[key] = engine_models_for(settings)
-        return _MODELS[key]
-
-
-def _triage_chunk(settings: Settings, record: Record, chunk: list[tuple[int, str]]) -> list[str]:
+def _triage_chunk(
+    settings: Settings, record: Record, chunk: list[tuple[int, str]]
+) -> list[BatchLine]:
     """A worker's task: the answer lines of one chunk."""
-    models = _models_for(settings)
+    models = models_for(settings)
     return [record(number, text, models) for number, text in chunk]
 
 
-def _score_chunk(
-    operating_point: str | None, chunk: Sequence[tuple[CrashNotification, bool, float]]
-) -> list[ScoredCase]:
-    from models.offline.field.evaluate import score_chunk
-
-    return score_chunk(chunk, operating_point=operating_point)
-
-
-def _client(scheduler: str) -> Any:
+def connect(scheduler: str) -> Any:
+    """A client of the scheduler at `scheduler` (Dask is imported here only)."""
     try:
         from distributed import Client
     except ImportError as exc:
@@ -85,7 +66,7 @@ def _client(scheduler: str) -> Any:
     return Client(scheduler, timeout=CONNECT_TIMEOUT_S)
 
 
-def _in_order(client: Any, function: Callable[..., Any], *args: Any, chunks: Iterator[Any]) -> Any:
+def in_order(client: Any, function: Callable[..., Any], *args: Any, chunks: Iterator[Any]) -> Any:
     """The results of ``function(*args, chunk)`` on the cluster, in the chunks' order.
 
     At most :data:`TASKS_PER_THREAD` chunks per worker thread are in flight.
@@ -137,40 +118,16 @@ def triage_batch_on_dask(
     total = count_items(src)
     evaluated = refused = 0
     with (
-        _client(scheduler) as client,
+        connect(scheduler) as dask,
         out.open("a", encoding="utf-8") as sink,
         tqdm(total=total, initial=done, unit="case", file=sys.stderr, desc="triage") as bar,
     ):
         chunks = iter_chunks(src, skip=done, size=CHUNK_LINES)
-        for lines in _in_order(client, _triage_chunk, settings, record, chunks=chunks):
+        for lines in in_order(dask, _triage_chunk, settings, record, chunks=chunks):
             for line in lines:
-                refused += '"error":' in line[:40]
-                sink.write(line + "\n")
+                refused += line.refused
+                sink.write(line.text + "\n")
             sink.flush()
             evaluated += len(lines)
             bar.update(len(lines))
     return evaluated, refused
-
-
-def evaluate_on_dask(
-    labelled: Sequence[tuple[CrashNotification, bool, float]],
-    *,
-    scheduler: str,
-    operating_point: str | None,
-) -> list[ScoredCase]:
-    """Score labelled notifications on the cluster (``aacn-triage evaluate``), in order."""
-    from tqdm import tqdm
-
-    def chunks() -> Iterator[Sequence[tuple[CrashNotification, bool, float]]]:
-        for start in range(0, len(labelled), CHUNK_LINES):
-            yield labelled[start : start + CHUNK_LINES]
-
-    cases: list[ScoredCase] = []
-    with (
-        _client(scheduler) as client,
-        tqdm(total=len(labelled), unit="case", file=sys.stderr, desc="triage") as bar,
-    ):
-        for scored in _in_order(client, _score_chunk, operating_point, chunks=chunks()):
-            cases.extend(scored)
-            bar.update(len(scored))
-    return cases

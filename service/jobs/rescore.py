@@ -1,7 +1,7 @@
 """Model recall report: the stored cases whose decision another model version would change.
 
-When a defect is found in a model (issue 32: a field model fitted on mph read
-as km/h), an operator must be able to say which past dispatch advice it
+When a defect is found in a model (e.g. a field model fitted on mph read as
+km/h), an operator must be able to say which past dispatch advice it
 touched. :func:`rescore` runs every stored notification again, as it was
 received, through the engine with another field model version, and compares
 the case-level decision (the worst occupant's) with the one stored. The stored

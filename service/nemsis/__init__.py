@@ -1,4 +1,4 @@
-"""NEMSIS v3.5.1: every stored case as an EMS patient care record (issue 40).
+"""NEMSIS v3.5.1: every stored case as an EMS patient care record.
 
 - ``codes``: the NEMSIS code lists used and the element template of a report.
 - ``mapping``: a stored case -> an ``EMSDataSet`` document and its report.
@@ -6,5 +6,6 @@
 - ``validate``: validation against the shipped XSDs (``xsd/``, with their provenance).
 - ``service``: who may read which case's record; build and validate (the use case).
 - ``endpoints``: ``GET /v1/cases/{case_id}/nemsis``.
-- ``export``, ``command``: ``aacn-triage cases export --nemsis`` (many cases to a directory).
+- ``export``: many cases to a directory (the command, ``aacn-triage cases export --nemsis``,
+  is ``service.cli.export``).
 """

@@ -15,11 +15,11 @@ from fastapi.responses import Response
 from fastapi.security import HTTPAuthorizationCredentials
 
 from service.auth import Caller, authenticate, bearer_scheme, caller_for_key_id
+from service.browser_session import SESSION_COOKIE, read_session
+from service.browser_session_end import session_has_ended
 from service.deps import ContextDep
 from service.nemsis.mapping import NemsisRecord
 from service.nemsis.service import record_for
-from service.pages.session import SESSION_COOKIE, read_session
-from service.pages.session_end import session_has_ended
 from service.problems import PROBLEM_MEDIA_TYPE, Problem
 
 __all__ = ["LEFT_OUT_HEADER", "NEMSIS_MEDIA_TYPE", "PLACEHOLDERS_HEADER", "router"]
@@ -80,7 +80,7 @@ def _caller(
     """An API key's caller, or the signed-in case pages' (their session cookie).
 
     The cookie is taken as the pages take it: signed, not expired, not signed out
-    (``service.pages.session_end``), its key active and not rotated since; else the
+    (``service.browser_session_end``), its key active and not rotated since; else the
     Bearer key is asked for.
     """
     if credentials is None and SESSION_COOKIE in request.cookies:

@@ -1,6 +1,6 @@
 """Recalibrate the served field model on the linked local outcomes, and write it.
 
-``aacn-triage outcomes recalibrate --site NAME`` (:mod:`service.outcomes.command`):
+``aacn-triage outcomes recalibrate --site NAME`` (:mod:`service.cli.outcomes`):
 
 1. read every stored occupant decided by the served artifact (its checksum recorded
    with the case) that has a current outcome: its decided probability, ISS 15+

@@ -6,7 +6,7 @@
 - ``GET /v1/session``: the sign-in form; ``POST /v1/session``: sign in with an API
   key (sets the session cookie); ``POST /v1/session/logout``: sign out.
 
-The pages accept a session cookie (``service.pages.session``) or, like the API, an
+The pages accept a session cookie (``service.browser_session``) or, like the API, an
 ``Authorization: Bearer`` key. They are HTML resources, kept out of the OpenAPI
 document; the JSON API is unchanged. An unauthenticated visit gets 401 with the
 sign-in form and no case data.
@@ -37,14 +37,7 @@ from service.auth import (
     hash_key,
     session_key_tag,
 )
-from service.cases import service as cases_service
-from service.context import ServiceContext
-from service.db.repository import CaseFilters
-from service.deps import ContextDep
-from service.outcomes.quality import AGE_GROUPS, CRASH_MODES, drift_settings_of, quality_report
-from service.pages import views as report
-from service.pages.quality_page import filters_from_query, quality_context
-from service.pages.session import (
+from service.browser_session import (
     COOKIE_PATH,
     LOGIN_CSRF_COOKIE,
     SESSION_COOKIE,
@@ -59,7 +52,14 @@ from service.pages.session import (
     set_login_csrf_cookie,
     set_session_cookie,
 )
-from service.pages.session_end import end_session, session_has_ended
+from service.browser_session_end import end_session, session_has_ended
+from service.cases import service as cases_service
+from service.context import ServiceContext
+from service.db.repository import CaseFilters
+from service.deps import ContextDep
+from service.outcomes.quality import AGE_GROUPS, CRASH_MODES, drift_settings_of, quality_report
+from service.pages import views as report
+from service.pages.quality_page import filters_from_query, quality_context
 from service.problems import UnprocessableNotification
 
 __all__ = ["CONTENT_SECURITY_POLICY", "router"]
@@ -409,7 +409,8 @@ async def login(request: Request, ctx: ContextDep) -> Response:
 
 @router.post("/v1/session/logout", response_class=HTMLResponse)
 async def logout(request: Request, ctx: ContextDep) -> Response:
-    """Sign out: the session is ended on the server (``session_end``) and its cookie cleared."""
+    """Sign out: the session is ended on the server (``service.browser_session_end``)
+    and its cookie cleared."""
     form = await _form(request)
     session = read_session(ctx.session_secret, request.cookies.get(SESSION_COOKIE), now=time.time())
     token = form.get("csrf_token", "")

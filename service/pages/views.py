@@ -19,23 +19,13 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from datetime import datetime
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 from urllib.parse import urlencode
 
 from jinja2 import Environment, FileSystemLoader, StrictUndefined, select_autoescape
 
-from models.injury.criteria import (
-    FMVSS208_CHEST_A3MS_LIMIT_G,
-    FMVSS208_CHEST_DEFLECTION_LIMIT_MM,
-    FMVSS208_HIC15_LIMIT,
-    FMVSS208_NIJ_LIMIT,
-)
-from models.injury.risk import (
-    VC_TOLERANCE_LAU_VIANO_1986_ABDOMEN,
-    VC_TOLERANCE_LAU_VIANO_1986_CHEST,
-    VC_TOLERANCE_VIANO_1989_ABDOMEN,
-    VC_TOLERANCE_VIANO_1989_CHEST,
-)
+from models.impact_mode import ImpactMode
+from models.injury.limits import SIDE_MODES, InjuryLimit, injury_limit
 from models.notification import Body, Seat
 from service.cases.result import derive_tiers
 from service.db.repository import CaseRecord
@@ -55,10 +45,8 @@ from service.pages.text import elapsed_text, fmt, parse_time, pct, utc_text
 __all__ = [
     "AuditView",
     "CaseView",
-    "Limit",
     "ListRow",
     "build_case_view",
-    "injury_limit",
     "render",
 ]
 
@@ -125,55 +113,6 @@ FIELD_ISS15_LABEL = (
     "P(ISS 15+) of such occupants in US towaway crashes, fitted on real NASS-CDS crashes "
     "1997-2014 and calibrated with the national weights (the trauma-center criterion)."
 )
-
-
-# ------------------------------------------------------------------ injury limits
-
-
-@dataclass(frozen=True)
-class Limit:
-    """A published limit or tolerance of an injury measure, with its source."""
-
-    value: float
-    source: str
-
-
-_VC_FRONTAL_CHEST = "Lau & Viano 1986 frontal tolerance (25 % risk of AIS 4+)"
-_VC_FRONTAL_ABDOMEN = "Lau & Viano 1986 frontal tolerance (25 % risk of AIS 5+)"
-_VC_SIDE = "Viano et al. 1989 lateral tolerance (25 % risk)"
-_SIDE_MODES = frozenset({"near_side", "far_side"})
-
-
-def injury_limit(measure: str, impact_mode: str, body: str) -> Limit | None:
-    """The engine's published limit for a measure, or None where it has none.
-
-    HIC15 and Nij: the FMVSS 208 limits (``models.injury.criteria``). Chest
-    deflection and 3 ms chest acceleration: the FMVSS 208 Hybrid III limits, in
-    frontal and rear modes only (the side modes measure rib deflection, whose
-    limits the engine does not hold). VC: the Lau & Viano frontal and Viano
-    lateral tolerances (``models.injury.risk``). CTI: no limit in the engine.
-    """
-    side = impact_mode in _SIDE_MODES
-    if measure == "hic15":
-        return Limit(FMVSS208_HIC15_LIMIT, "FMVSS 208 (49 CFR 571.208 S6.2)")
-    if measure == "nij":
-        return Limit(FMVSS208_NIJ_LIMIT, "FMVSS 208 (49 CFR 571.208 S6.6)")
-    if measure == "chest_deflection_mm" and not side:
-        try:
-            return Limit(FMVSS208_CHEST_DEFLECTION_LIMIT_MM[Body(body)], "FMVSS 208 Hybrid III")
-        except (ValueError, KeyError):
-            return None
-    if measure == "chest_a3ms_g" and not side:
-        return Limit(FMVSS208_CHEST_A3MS_LIMIT_G, "FMVSS 208 (3 ms clip)")
-    if measure == "chest_vc_m_s":
-        if side:
-            return Limit(VC_TOLERANCE_VIANO_1989_CHEST, _VC_SIDE)
-        return Limit(VC_TOLERANCE_LAU_VIANO_1986_CHEST, _VC_FRONTAL_CHEST)
-    if measure == "abdomen_vc_m_s":
-        if side:
-            return Limit(VC_TOLERANCE_VIANO_1989_ABDOMEN, _VC_SIDE)
-        return Limit(VC_TOLERANCE_LAU_VIANO_1986_ABDOMEN, _VC_FRONTAL_ABDOMEN)
-    return None
 
 
 MEASURE_LABELS = {
@@ -294,7 +233,7 @@ class MeasureRow:
     value: float
     value_text: str
     ci_text: str
-    limit: Limit | None
+    limit: InjuryLimit | None
     limit_text: str
     ratio: float | None
     #: Width of the value's bar in a 0-120 viewBox where the limit sits at 80.
@@ -433,23 +372,34 @@ def _assumptions(items: Any) -> tuple[list[AssumptionView], dict[int, list[Assum
     return case_level, per_occupant
 
 
+_Engine = TypeVar("_Engine", ImpactMode, Body)
+
+
+def _enum(kind: type[_Engine], value: Any) -> _Engine | None:
+    """A stored string as its engine enum, or None (not one of its values)."""
+    try:
+        return kind(value)
+    except ValueError:
+        return None
+
+
 def _measure_rows(occ: Mapping[str, Any]) -> tuple[MeasureRow, ...]:
     measures = _map(occ, "measures")
     cis = _map(occ, "measures_ci95")
-    mode, body = str(occ.get("impact_mode") or ""), str(occ.get("body") or "")
+    mode, body = _enum(ImpactMode, occ.get("impact_mode")), _enum(Body, occ.get("body"))
     rows = []
     for key, raw in measures.items():
         value = _num(raw)
         if value is None:
             continue
         label, unit = MEASURE_LABELS.get(key, (key, ""))
-        if key == "chest_deflection_mm" and mode in _SIDE_MODES:
+        if key == "chest_deflection_mm" and mode in SIDE_MODES:
             label = "Rib deflection"
         ci = cis.get(key)
         ci_text = "-"
         if isinstance(ci, Sequence) and len(ci) == 2 and None not in (_num(ci[0]), _num(ci[1])):
             ci_text = f"{fmt(float(ci[0]))} to {fmt(float(ci[1]))}"
-        limit = injury_limit(key, mode, body)
+        limit = None if mode is None or body is None else injury_limit(key, mode, body)
         ratio = value / limit.value if limit is not None and limit.value > 0 else None
         rows.append(
             MeasureRow(

@@ -111,7 +111,7 @@ def head_injury() -> dict[str, Any]:
 
 
 def near_side_56() -> dict[str, Any]:
-    """Issue 39's case: a 56 km/h near-side crash, the driver's side and curtain airbags
+    """The body map's case: a 56 km/h near-side crash, the driver's side and curtain airbags
     deployed (the occupant models' curves put the head/neck at AIS 6)."""
     body = summary(56.0, 270.0)
     body["occupants"][0]["side_airbag"] = "deployed"
@@ -159,7 +159,7 @@ def acceleration() -> dict[str, Any]:
 
 
 def mixed_tiers() -> dict[str, Any]:
-    """Issue 39's near-side crash with a belted far-side passenger: the driver in the high
+    """The body map's near-side crash with a belted far-side passenger: the driver in the high
     tier (P about 0.40), the passenger in the moderate one (about 0.09)."""
     body = near_side_56()
     body["occupants"].append(

@@ -1,4 +1,4 @@
-"""Spreading keep-alive connections over `serve --workers N` (service.balance, issue 24)."""
+"""Spreading keep-alive connections over `serve --workers N` (service.balance)."""
 
 from __future__ import annotations
 

@@ -25,7 +25,7 @@ def test_the_documented_result_example_is_a_valid_result() -> None:
 
 def test_the_result_example_is_the_shipped_engines_answer() -> None:
     """The documented answer to the summary example is what the engine answers now
-    (rounded as the example is): a model release re-derives it (issue 32)."""
+    (rounded as the example is): a model release re-derives it."""
     from datetime import UTC, datetime
 
     from models.triage import load_engine_models

@@ -1,4 +1,4 @@
-"""The TLS site of the nginx recipe: HTTPS to a served process, HSTS once, sign-in (issue 41).
+"""The TLS site of the nginx recipe: HTTPS to a served process, HSTS once, sign-in.
 
 Debian's nginx with ``deploy/nginx/aacn-triage-tls.conf`` (a throwaway self-signed
 certificate, loopback ports) in front of the real ``aacn-triage serve``.

@@ -1,4 +1,4 @@
-"""Replicas behind a real nginx, one killed mid-load (issue 33; `tests.replicas`).
+"""Replicas behind a real nginx, one killed mid-load (`tests.replicas`).
 
 Three ``aacn-triage serve`` processes on one real PostgreSQL database behind
 Debian's nginx with the repository's site configuration. Several hundred POSTs

@@ -1,4 +1,4 @@
-"""A revoked key is refused whatever the store's state (issue 41).
+"""A revoked key is refused whatever the store's state.
 
 The key is revoked by another process (its own engine, as ``aacn-triage keys
 revoke`` would) while PostgreSQL is up and the service has not seen the key since;

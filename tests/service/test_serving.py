@@ -1,4 +1,4 @@
-"""`aacn-triage serve --workers N` as a real server: headers, and SIGTERM (issue 24)."""
+"""`aacn-triage serve --workers N` as a real server: headers, and SIGTERM."""
 
 from __future__ import annotations
 

@@ -1,4 +1,4 @@
-"""Sign-out ends the session on the server: a kept copy of the cookie is refused (issue 41)."""
+"""Sign-out ends the session on the server: a kept copy of the cookie is refused."""
 
 from __future__ import annotations
 
@@ -11,8 +11,8 @@ from sqlalchemy import func, select
 
 from service.app import create_app
 from service.auth import Role, create_api_key
+from service.browser_session import SESSION_COOKIE
 from service.db.tables import EndedSession
-from service.pages.session import SESSION_COOKIE
 from service.settings import Settings
 from tests.service.pages_support import Page, csrf_token
 from tests.service.test_store_outage import _database

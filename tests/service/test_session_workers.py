@@ -1,4 +1,4 @@
-"""Sign-in on the default start: every worker of `serve` signs with one secret (issue 41).
+"""Sign-in on the default start: every worker of `serve` signs with one secret.
 
 Two worker processes of the real ``aacn-triage serve``, real HTTP on loopback, a new
 connection for every request (so both workers answer): the sign-in form comes from

@@ -1,4 +1,4 @@
-"""The start-up log is quiet (issue 33): no Alembic chatter, one line per migration.
+"""The start-up log is quiet: no Alembic chatter, one line per migration.
 
 A real ``serve`` (this interpreter's, on a fresh SQLite file, so it migrates) is
 started and stopped; its log has no line of Alembic's loggers (a line per plugin and

@@ -1,4 +1,4 @@
-"""The store fails under load (issue 24): every answered case is stored exactly once.
+"""The store fails under load: every answered case is stored exactly once.
 
 A real PostgreSQL cluster of the test's own is made read-only, then stopped
 (``pg_ctl stop``) and started again while threads keep POSTing notifications to

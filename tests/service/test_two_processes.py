@@ -1,4 +1,4 @@
-"""Two service processes on one PostgreSQL database (issue 24).
+"""Two service processes on one PostgreSQL database.
 
 Two ``aacn-triage serve`` processes, each its own connection pool, on one real
 PostgreSQL database: 20 threads racing on one event id store one case (same

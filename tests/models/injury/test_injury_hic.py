@@ -5,12 +5,14 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import numpy.typing as npt
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
+from numba import njit
 
-from models.injury.criteria import HicResult, _hic_search, _hic_search_exhaustive, hic
+from models.injury.criteria import HicResult, _hic_search, _hic_window_from, _inv_cubes, hic
 
 
 def _brute_force_hic(a: np.ndarray, fs: float, max_window_ms: float) -> float:
@@ -33,6 +35,25 @@ def _rect(
 ) -> np.ndarray:
     """Rectangular pulse: `periods + 1` samples at `amplitude`, lasting periods / fs s."""
     return np.concatenate((np.zeros(lead), np.full(periods + 1, amplitude), np.zeros(tail)))
+
+
+@njit
+def _hic_search_exhaustive(
+    cum: npt.NDArray[np.float64], dt: float, nmax: int
+) -> tuple[float, int, int]:
+    """The reference of ``_hic_search``: every start evaluated."""
+    n = cum.shape[0]
+    inv_t3 = _inv_cubes(dt, nmax)
+    best2 = 0.0
+    bi = 0
+    bj = 0
+    for i in range(n - 1):
+        local, lj = _hic_window_from(cum, inv_t3, i, nmax)
+        if local > best2:
+            best2 = local
+            bi = i
+            bj = lj
+    return best2, bi, bj
 
 
 @pytest.mark.parametrize(("amplitude", "duration_ms"), [(60.0, 5.0), (80.0, 10.0), (150.0, 2.0)])

@@ -1,10 +1,10 @@
-"""The body map's two layers on the case page (issue 39, item 2), through the ASGI app.
+"""The body map's two layers on the case page, through the ASGI app.
 
 Layer one colours each AIS body region by the stored field region risk
 (``occupants[].region_risk.<region> = {probability, probability_ci95, ais_level}``);
 layer two is the occupant model's region AIS, labelled and stated with its measured
 skill. A stored answer without ``region_risk`` renders with the first layer marked
-unavailable. tests/service/test_pages_browser.py drives the same page in Chromium.
+unavailable. tests/service/pages/test_pages_browser.py drives the same page in Chromium.
 """
 
 from __future__ import annotations

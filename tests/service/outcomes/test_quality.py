@@ -123,7 +123,7 @@ def app(
         yield api
 
 
-from tests.service.test_outcomes import postgres_url_module  # noqa: E402, F401
+from tests.service.outcomes.test_outcomes import postgres_url_module  # noqa: E402, F401
 
 
 def _quality(api: ApiClient, **query: Any) -> dict[str, Any]:

@@ -1,4 +1,4 @@
-"""The batch commands on a Dask cluster give the local pool's results (issue 33).
+"""The batch commands on a Dask cluster give the local pool's results.
 
 A real ``dask.distributed`` cluster on loopback (a scheduler and two worker
 processes, `LocalCluster`) runs ``aacn-triage triage --batch --scheduler`` and

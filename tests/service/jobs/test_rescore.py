@@ -1,4 +1,4 @@
-"""`aacn-triage cases rescore`: the model recall report (issue 32).
+"""`aacn-triage cases rescore`: the model recall report.
 
 A database holds cases decided by a retired field model, submitted through the
 real HTTP path: 1.0.0 (fitted on mph read as km/h), recalled with its refit
@@ -28,6 +28,7 @@ from service.db.tables import Case, CaseOccupant
 from service.jobs.rescore import CSV_COLUMNS, rescore
 from service.settings import get_settings
 from tests.conftest import _api
+from tests.paths import VEDS_DOCS
 from tests.support import ApiClient, summary
 
 #: Delta-V of the stored cases, km/h: from a low-speed crash to a severe one, so
@@ -39,8 +40,8 @@ RETIRED = "1.0.0"
 #: The MAIS 3+ refit, retired as the decision by the ISS 15+ model 3.0.0.
 MAIS3 = "2.0.0"
 
-#: VEDS test documents (tests/service/veds/).
-VEDS_DIR = Path(__file__).parent / "veds"
+#: VEDS test documents (tests/service/cases/veds/).
+VEDS_DIR = VEDS_DOCS
 
 
 @pytest.fixture
@@ -75,7 +76,7 @@ def _snapshot(api: ApiClient) -> list[tuple[Any, ...]]:
 
 
 def _submit_cases(api: ApiClient) -> dict[str, dict[str, Any]]:
-    """The summary notifications of DELTA_V_KMH, and one VEDS document (issue 34)."""
+    """The summary notifications of DELTA_V_KMH, and one VEDS document."""
     out = {}
     for i, dv in enumerate(DELTA_V_KMH):
         body = summary(dv, belted=i % 3 != 0, event_id=f"recall-{i}")

@@ -1,6 +1,6 @@
 """The case page, the case list and their browser sign-in, through the ASGI app.
 
-These run everywhere (no browser); tests/service/test_pages_browser.py drives the
+These run everywhere (no browser); tests/service/pages/test_pages_browser.py drives the
 same pages in headless Chromium against the real served process.
 """
 
@@ -13,15 +13,16 @@ from typing import Any
 import pytest
 from fastapi.testclient import TestClient
 
-from models.injury import criteria, risk
+from models.impact_mode import ImpactMode
+from models.injury.limits import injury_limit
 from models.notification import Body
 from service.auth import session_key_tag
+from service.browser_session import SESSION_COOKIE, issue_session
 from service.cases import service as cases_service
 from service.db import repository
 from service.db.tables import ApiKey, Case
 from service.pages import views as report
 from service.pages.drawing import car_diagram, pulse_plot
-from service.pages.session import SESSION_COOKIE, issue_session
 from service.settings import Settings
 from tests.service.pages_support import (
     TIER_CASES,
@@ -124,8 +125,8 @@ def test_the_page_numbers_are_the_stored_case_numbers(api: ApiClient, make: Any)
             rows = page.all("tr", within=f"occupant-{i}", data_measure="*")
             assert {r.attrs["data-measure"]: _f(r, "data-value") for r in rows} == occ["measures"]
             for row in rows:
-                limit = report.injury_limit(
-                    row.attrs["data-measure"], occ["impact_mode"], occ["body"]
+                limit = injury_limit(
+                    row.attrs["data-measure"], ImpactMode(occ["impact_mode"]), Body(occ["body"])
                 )
                 assert (limit is None) == ("data-limit" not in row.attrs)
                 if limit is not None:
@@ -627,26 +628,6 @@ def test_the_case_list_filters_like_the_api(api: ApiClient) -> None:
 
 
 # ---------------------------------------------------------------- drawings, limits
-
-
-def test_injury_limits_are_the_engines_published_constants() -> None:
-    frontal = {
-        m: report.injury_limit(m, "frontal", "female_5th")
-        for m in ("hic15", "nij", "chest_deflection_mm", "chest_a3ms_g", "chest_vc_m_s")
-    }
-    assert frontal["hic15"].value == criteria.FMVSS208_HIC15_LIMIT == 700.0
-    assert frontal["nij"].value == criteria.FMVSS208_NIJ_LIMIT
-    assert (
-        frontal["chest_deflection_mm"].value
-        == (criteria.FMVSS208_CHEST_DEFLECTION_LIMIT_MM[Body.FEMALE_5TH])
-    )
-    assert frontal["chest_vc_m_s"].value == risk.VC_TOLERANCE_LAU_VIANO_1986_CHEST
-    side_vc = report.injury_limit("abdomen_vc_m_s", "near_side", "male_50th")
-    assert side_vc is not None
-    assert side_vc.value == risk.VC_TOLERANCE_VIANO_1989_ABDOMEN
-    # no limit held by the engine: shown without one
-    assert report.injury_limit("chest_cti", "frontal", "male_50th") is None
-    assert report.injury_limit("chest_deflection_mm", "far_side", "male_50th") is None
 
 
 def test_pdof_arrow_points_into_the_car_from_the_side_of_the_force() -> None:

@@ -397,7 +397,7 @@ def _store_region_risk(served: Served, name: str, region_risk: dict[str, Any] | 
 def test_the_body_map_shows_region_risk_first_and_the_physics_layer_labelled(
     served: Served, signed_in: Any
 ) -> None:
-    from tests.service.test_pages_regions import REGION_RISK
+    from tests.service.pages.test_pages_regions import REGION_RISK
 
     occ = served.cases["head-injury"]["result"]["occupants"][0]
     given = occ.get("region_risk") or None
@@ -444,7 +444,7 @@ def test_the_body_map_shows_region_risk_first_and_the_physics_layer_labelled(
 def test_a_56_kmh_near_side_case_shows_no_ais_6_and_says_why(
     served: Served, signed_in: Any
 ) -> None:
-    """Issue 39's case: a 56 km/h near-side crash with the side airbags deployed."""
+    """The body map's case: a 56 km/h near-side crash with the side airbags deployed."""
     tab = _tab(signed_in)
     page = tab.page
     page.goto(served.url("near-side-56"))

@@ -54,10 +54,8 @@ def _export(
 
 
 def _run(args: argparse.Namespace) -> int:
-    from service.db import migrate
-    from service.db.session import make_engine, make_sessionmaker
+    from service.cli.common import load_settings, open_sessions
     from service.nemsis.service import AgencyMissing, NemsisSchemaUnavailable, agency_from
-    from service.settings import get_settings
 
     def say(text: str) -> None:
         sys.stderr.write(text + "\n")
@@ -65,7 +63,7 @@ def _run(args: argparse.Namespace) -> int:
     if not args.nemsis:
         say("error: name the format of the records: --nemsis (NEMSIS v3.5.1 EMSDataSet)")
         return 2
-    settings = get_settings()
+    settings = load_settings()
     try:
         agency = agency_from(
             settings,
@@ -77,16 +75,12 @@ def _run(args: argparse.Namespace) -> int:
         flags = ", ".join("--" + (e.field.replace("_", "-")) for e in exc.errors or [])
         say(f"error: {exc.detail} ({flags})")
         return 2
-    if settings.auto_migrate:
-        migrate.upgrade(settings.database_url)
-    engine = make_engine(settings.database_url)
     try:
-        summary = _export(args, make_sessionmaker(engine), agency)
+        with open_sessions() as sessions:
+            summary = _export(args, sessions, agency)
     except NemsisSchemaUnavailable as exc:
         say(f"error: {exc.detail}")
         return 1
-    finally:
-        engine.dispose()  # no connection left to the garbage collector
     say(
         f"{summary.cases} cases: {summary.written} records written, {summary.kept} kept from "
         f"an earlier run, {len(summary.refused)} refused; in {args.out}"

@@ -1,4 +1,4 @@
-"""The fuzzing findings of issue 24, one test each (each failed on the code before it)."""
+"""The fuzzing findings, one test each (each failed on the code before its fix)."""
 
 from __future__ import annotations
 

@@ -13,43 +13,29 @@ from __future__ import annotations
 
 import argparse
 import getpass
-import sys
 from pathlib import Path
 from typing import Any
+
+from service.cli.common import echo as _say
+from service.cli.common import load_settings, open_sessions
 
 __all__ = ["add_parser"]
 
 
-def _say(text: str, *, err: bool = False) -> None:
-    stream = sys.stderr if err else sys.stdout
-    stream.write(text + "\n")
-    stream.flush()
-
-
 def _run(args: argparse.Namespace) -> int:
-    from service.db import migrate
-    from service.db.session import make_engine, make_sessionmaker
     from service.outcomes.importer import ImportFileError, import_outcomes
-    from service.settings import get_settings
 
-    settings = get_settings()
     path = Path(args.file)
     if not path.is_file():
         _say(f"error: {path} is not a file", err=True)
         return 2
-    if settings.auto_migrate:
-        migrate.upgrade(settings.database_url)
-    engine = make_engine(settings.database_url)
     by = args.by or f"{getpass.getuser()} (import of {path.name})"
     try:
-        report = import_outcomes(
-            make_sessionmaker(engine), path, written_by=by, dry_run=args.dry_run
-        )
+        with open_sessions() as sessions:
+            report = import_outcomes(sessions, path, written_by=by, dry_run=args.dry_run)
     except ImportFileError as exc:
         _say(f"error: {path}: {exc}; nothing imported", err=True)
         return 2
-    finally:
-        engine.dispose()
     for line, reason in report.refused:
         _say(f"{path.name}:{line}: refused: {reason}", err=True)
     counts = ", ".join(f"{n} {action}" for action, n in report.actions.items())
@@ -71,12 +57,9 @@ def _run_recalibrate(args: argparse.Namespace) -> int:
     from models.field.recalibration import SE_LOGIT_REQUIRED, TooFewOutcomes
     from models.field.risk_model import RiskModel, load_default
     from models.field.versions import load_field_artifact
-    from service.db import migrate
-    from service.db.session import make_engine, make_sessionmaker
     from service.outcomes.recalibrate import recalibrate
-    from service.settings import get_settings
 
-    settings = get_settings()
+    settings = load_settings()
     try:
         served = (
             load_default()
@@ -89,27 +72,23 @@ def _run_recalibrate(args: argparse.Namespace) -> int:
     if not isinstance(served, RiskModel):
         _say(f"error: {served.name} {served.version} is not an ISS 15+ risk model", err=True)
         return 2
-    if settings.auto_migrate:
-        migrate.upgrade(settings.database_url)
-    engine = make_engine(settings.database_url)
     out_dir = Path(args.out_dir) if args.out_dir else settings.local_model_dir
     try:
-        result = recalibrate(
-            make_sessionmaker(engine),
-            served,
-            site=args.site,
-            out_dir=out_dir,
-            dry_run=args.dry_run,
-            local_dirs=(settings.local_model_dir,),
-        )
+        with open_sessions() as sessions:
+            result = recalibrate(
+                sessions,
+                served,
+                site=args.site,
+                out_dir=out_dir,
+                dry_run=args.dry_run,
+                local_dirs=(settings.local_model_dir,),
+            )
     except TooFewOutcomes as exc:
         _say(f"refused: {exc}", err=True)
         return 1
     except ValueError as exc:
         _say(f"error: {exc}", err=True)
         return 2
-    finally:
-        engine.dispose()
     r, cv = result.recalibration, result.cross_validation
     _say(
         f"{result.version}: recalibrated {served.name} {result.served_version} on "

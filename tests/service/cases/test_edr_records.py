@@ -1,4 +1,4 @@
-"""EDR records that are not physical are refused over HTTP, naming the field (issue 41)."""
+"""EDR records that are not physical are refused over HTTP, naming the field."""
 
 from __future__ import annotations
 

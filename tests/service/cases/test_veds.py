@@ -1,6 +1,6 @@
 """VEDS (RFC 8148) notifications: mapped to the JSON notification, triaged alike, hardened.
 
-The documents are in ``tests/service/veds/`` (the two public examples, BSD-2-Clause with
+The documents are in ``tests/service/cases/veds/`` (the two public examples, BSD-2-Clause with
 their licence beside them, and documents written for these tests in their shape).
 Variants for refusals are made from ``kph-frontal.xml`` by replacing one element.
 """

@@ -1,4 +1,4 @@
-"""Server-side end of a browser session: a signed-out cookie is refused (issue 41).
+"""Server-side end of a browser session: a signed-out cookie is refused.
 
 The session cookie is signed and carries its expiry; without a record on the
 server, a copy of it kept after the sign-out would open the pages until then.
@@ -16,8 +16,8 @@ from datetime import UTC, datetime
 from sqlalchemy.exc import IntegrityError
 from sqlalchemy.orm import Session, sessionmaker
 
+from service.browser_session import BrowserSession
 from service.db import repository
-from service.pages.session import BrowserSession
 
 __all__ = ["end_session", "session_has_ended"]
 

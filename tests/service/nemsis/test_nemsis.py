@@ -1,4 +1,4 @@
-"""NEMSIS v3.5.1 records of stored cases (issue 40): valid, faithful, guarded.
+"""NEMSIS v3.5.1 records of stored cases: valid, faithful, guarded.
 
 Every record is checked against the shipped XSDs with the service's own validator,
 which is shown to be real on NEMSIS's motor-vehicle-crash test case (it passes) and
@@ -21,6 +21,7 @@ from lxml import etree
 
 from models.notification import Seat
 from service.auth import Role
+from service.browser_session import SESSION_COOKIE
 from service.cases.result import StoredCase
 from service.cases.veds import VEDS_MEDIA_TYPE, clock_to_pdof_deg
 from service.cli import main as cli
@@ -28,14 +29,14 @@ from service.nemsis import codes
 from service.nemsis.mapping import Agency, pdof_clock_hour
 from service.nemsis.service import NemsisRecordInvalid, agency_from, checked_record
 from service.nemsis.validate import XSD_DIR, validate
-from service.pages.session import SESSION_COOKIE
 from service.settings import Settings, get_settings
+from tests.paths import VEDS_DOCS
 from tests.service.pages_support import Page, csrf_token
 from tests.support import ApiClient, assert_problem, example, post_case, stored_case, summary
 
 HERE = Path(__file__).parent
-MVC_CASE = HERE / "nemsis" / "2025-EMS-3-MVC_v351.xml"
-VEDS_DIR = HERE / "veds"
+MVC_CASE = HERE / "2025-EMS-3-MVC_v351.xml"
+VEDS_DIR = VEDS_DOCS
 NS = {"n": "http://www.nemsis.org"}
 XSI_NIL = "{http://www.w3.org/2001/XMLSchema-instance}nil"
 AGENCY = {"agency_state_id": "C034", "agency_number": "351-C034P2", "agency_state": "09"}
@@ -156,7 +157,7 @@ def test_every_code_used_is_in_the_nemsis_code_list() -> None:
 
 
 def test_every_seat_of_the_contract_has_a_nemsis_seat() -> None:
-    # a seat added to the wire contract (issue 38: front middle, ...) must be mapped here
+    # a seat added to the wire contract (front middle, ...) must be mapped here
     assert {s.value for s in Seat} <= set(codes.SEAT_LOCATION)
     assert {s.value for s in Seat} <= set(codes.SEAT_ROW_LOCATION)
 
@@ -656,7 +657,7 @@ def test_the_case_page_links_the_record_and_its_session_opens_it(api: ApiClient)
     r = browser.get(link.attrs["href"], params=AGENCY)
     assert r.status_code == 200, r.text
     assert validate(r.content) == []
-    # a copy of the cookie kept after the sign-out opens nothing (issue 41)
+    # a copy of the cookie kept after the sign-out opens nothing
     replay = TestClient(api.client.app, base_url="https://testserver")
     kept = browser.cookies.get(SESSION_COOKIE)
     replay.cookies.set(SESSION_COOKIE, kept, domain="testserver.local", path="/v1")
