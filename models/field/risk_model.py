@@ -46,7 +46,7 @@ from models.codehash import source_tree_sha256
 from models.constants import Z_95
 from models.field.boosted import Forest, TreeBag
 from models.field.measurement import (
-    MEASUREMENT_MODEL,
+    MEASUREMENT_MODELS,
     DeltaVSource,
     MeasurementModel,
     delta_v_source_of,
@@ -661,12 +661,14 @@ class RiskModel:
         measurement = None
         if "measurement_model" in doc:
             mm = _get(doc, "measurement_model")
-            measurement = MeasurementModel(str(_get(mm, "name")), str(_get(mm, "version")))
-            if measurement != MEASUREMENT_MODEL:
+            name, version = str(_get(mm, "name")), str(_get(mm, "version"))
+            known = MEASUREMENT_MODELS.get(version)
+            if known is None or known.name != name:
                 raise ArtifactError(
-                    f"measurement model {measurement.label} is not the served "
-                    f"{MEASUREMENT_MODEL.label} (stale artifact)"
+                    f"measurement model {name}@{version} is not one this code knows "
+                    f"({', '.join(m.label for m in MEASUREMENT_MODELS.values())})"
                 )
+            measurement = known
         if cand == ALL_COLUMNS_3:
             try:
                 donors = DonorTable.from_document(_get(_get(doc, "unknowns"), "donors"))
@@ -788,8 +790,10 @@ class RiskModel:
         expanded, owner = substitute(arrays, blocks, self.donors)
         counts = np.bincount(owner, minlength=len(inputs)).astype(np.float64)
         weight = 1.0 / counts[owner]
-        if measured:
-            expanded, owner, weight = over_reconstructed_nodes(expanded, owner, weight, measured)
+        if measured and self.measurement is not None:
+            expanded, owner, weight = over_reconstructed_nodes(
+                expanded, owner, weight, measured, self.measurement
+            )
         # the medians inputs_arrays_3 put in for unknown inputs were replaced by the donors'
         named = tuple(
             tuple(k for k in imp if k not in unknown)

@@ -273,7 +273,11 @@ def _score(s: Mapping[str, Any], label: str) -> str:
     return f"| {label} | {auc} | {s['auc_weighted']:.3f} | {ratio} | {s['slope_weighted']:.2f} |"
 
 
-def readme_block(doc: Mapping[str, Any], example: Mapping[str, Any]) -> str:
+def readme_block(
+    doc: Mapping[str, Any],
+    example: Mapping[str, Any],
+    measured_check: Mapping[str, Any] | None = None,
+) -> str:
     """The README's generated block (markers included) from an artifact and the example's answer.
 
     Parameters
@@ -282,6 +286,9 @@ def readme_block(doc: Mapping[str, Any], example: Mapping[str, Any]) -> str:
         The field risk model artifact document (``models/field/artifacts/field_iss15.json``).
     example : mapping
         :func:`example_answer` of `doc`.
+    measured_check : mapping, optional
+        The held-out measured-delta-V check of `doc`
+        (:func:`models.offline.field.risk_measured.load_check`).
     """
     iss = doc["outcomes"]["iss15"]
     data = doc["data"]
@@ -320,7 +327,7 @@ def readme_block(doc: Mapping[str, Any], example: Mapping[str, Any]) -> str:
         "published vehicle-level figure, an anchor: 0.84).",
         "",
         *([*readme_knowledge_lines(doc), ""] if "unknowns" in doc else []),
-        *([*readme_measured_lines(doc), ""] if "measurement_model" in doc else []),
+        *([*readme_measured_lines(doc, measured_check), ""] if "measurement_model" in doc else []),
         "The example above answers "
         f"P(ISS 15+) = {example['probability']:.4f} "
         f"[{example['probability_ci95'][0]:.4f}, {example['probability_ci95'][1]:.4f}] "

@@ -59,7 +59,17 @@ def main(argv: Sequence[str] | None = None) -> int:
         help="refit the decision (ISS 15+) only and carry the region models of the shipped "
         "artifact of VERSION (models/offline/field/risk_decision.py); reuses the stage cache",
     )
+    parser.add_argument(
+        "--check-measured",
+        action="store_true",
+        help="run only the held-out measured-delta-V check of the shipped artifact (no refit): "
+        "writes docs/field/measured_check.json and the model card's and README's text from it",
+    )
     args = parser.parse_args(argv)
+    if args.check_measured:
+        return _check_measured(
+            args.out or default_report_dir(), None if args.no_cache else args.cache
+        )
     cfg = (
         RiskConfig(subsample=0.2, n_bootstrap=5, n_metric_bootstrap=30, n_splits=3)
         if args.quick
@@ -75,6 +85,12 @@ def main(argv: Sequence[str] | None = None) -> int:
     path = write_risk_artifact(fit.artifact, args.artifact)
     card = write_risk_model_card(fit, args.out or default_report_dir())
     sys.stderr.write(f"artifact: {path}\nmodel card: {card}\n")
+    check = fit.figures.get("measured_check")
+    if check is not None:
+        from models.offline.field.risk_measured import CHECK_FILE, write_check
+
+        written = write_check(check, (args.out or default_report_dir()) / CHECK_FILE)
+        sys.stderr.write(f"measured-delta-V check: {written}\n")
     if args.heldout_csv is not None:
         keys = fit.data.rows[["year", "psu", "caseno", "vehno", "occno"]].copy()
         for name, p in fit.oof.items():
@@ -86,8 +102,27 @@ def main(argv: Sequence[str] | None = None) -> int:
         # the shipped artifact: the README's figures and example answer follow it
         from models.offline.field.readme import example_answer, readme_block, update_readme
 
-        readme = update_readme(readme_block(fit.artifact, example_answer(fit.artifact)))
+        readme = update_readme(readme_block(fit.artifact, example_answer(fit.artifact), check))
         sys.stderr.write(f"README figures: {readme or 'no README with the markers'}\n")
+    return 0
+
+
+def _check_measured(out_dir: Path, cache: Path | None) -> int:
+    """``fit-field --check-measured``: the check of the shipped artifact, its card and README."""
+    from models.offline.field.readme import example_answer, readme_block, update_readme
+    from models.offline.field.risk_decision import check_served
+    from models.offline.field.risk_measured import CHECK_FILE, write_check
+    from models.offline.field.risk_report import rewrite_card_text
+
+    doc = json.loads(default_artifact_path().read_text(encoding="utf-8"))
+    check = check_served(doc, cache)
+    written = write_check(check, out_dir / CHECK_FILE)
+    card = rewrite_card_text(doc, check, out_dir)
+    readme = update_readme(readme_block(doc, example_answer(doc), check))
+    sys.stderr.write(
+        f"measured-delta-V check: {written}\nmodel card: {card}\n"
+        f"README figures: {readme or 'no README with the markers'}\n"
+    )
     return 0
 
 

@@ -16,14 +16,19 @@ children are a ninth with a sixteenth of the positives, so it may drop terms
 that only children need (their age enters no other column: set 1 clamps every
 age below 16 to 16). Each fold's model is fitted once and scores its held-out
 occupants two ways: as sent, and with age, sex, stature and mass unknown
-(integrated, :mod:`models.field.unknowns`). The operating points' held-out figures take
-each fold's threshold from the other folds' held-out predictions (the whole
-fit refits inside each training part; the card names the method).
+(integrated, :mod:`models.field.unknowns`). Each fold's model is kept (a
+stage), and the measured-delta-V consistency check
+(:mod:`models.offline.field.risk_measured`) scores the held-out occupants
+through it with the delta-V a vehicle would have measured. The operating
+points' held-out figures take each fold's threshold from the other folds'
+held-out predictions (the whole fit refits inside each training part; the
+card names the method).
 """
 
 from __future__ import annotations
 
 from dataclasses import replace
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -49,6 +54,15 @@ from models.offline.field.risk_knowledge import (
     donor_table_of,
     integrated_probability,
     knowledge_extras,
+    knowledge_groups,
+)
+from models.offline.field.risk_measured import (
+    MEASURED_DRAWS,
+    MEASURED_SEED,
+    READINGS,
+    check_document,
+    measured_check,
+    measured_oof,
 )
 from models.offline.field.risk_metrics import crash_resamples, score
 from models.offline.field.risk_run import (
@@ -59,12 +73,13 @@ from models.offline.field.risk_run import (
     _iss_extras,
     _oof_threshold_flags,
     _outcome_stage,
+    _round,
     _tier_extras,
     crash_folds_cached,
     target_with_margin,
 )
 
-__all__ = ["decision_spec", "fit_decision"]
+__all__ = ["check_served", "decision_spec", "fit_decision", "served_spec"]
 
 
 def decision_spec(selected: Spec) -> Spec:
@@ -132,9 +147,7 @@ def fit_decision(config: RiskConfig, cache_dir: Path | None, regions_from: str) 
     )
     if "heldout_flags" not in figures:  # figures cached before the tiers' flags were kept
         figures["heldout_flags"] = {
-            name: _oof_threshold_flags(
-                iss.y, p, folds, target_with_margin(req, float(iss.y.sum()))
-            )
+            name: _oof_threshold_flags(iss.y, p, folds, target_with_margin(req, float(iss.y.sum())))
             for name, req in (("sens85", cfg.sensitivity), ("acs_cot", cfg.acs_cot_sensitivity))
         }
     figures["tiers"] = _tier_extras(d, stage, figures, folds, resamples, cfg)
@@ -156,8 +169,74 @@ def fit_decision(config: RiskConfig, cache_dir: Path | None, regions_from: str) 
 
     doc.pop("content_sha256", None)
     doc["content_sha256"] = canonical_content_sha256(doc)
+    figures["measured_check"] = _measured_stage(d, cfg, cache, spec, folds, doc)
     oof = {"iss15": p, "iss15_sensed_only": preds["sensed_only"]}
     return RiskFit(artifact=doc, figures=figures, oof=oof, data=d)
+
+
+def _measured_stage(
+    d: RiskData,
+    cfg: RiskConfig,
+    cache: _Cache,
+    spec: Spec,
+    folds: list[tuple[IntArray, IntArray]],
+    doc: dict[str, Any],
+) -> dict[str, Any]:
+    """The measured-delta-V consistency check of `doc` (each fold's model kept as a stage)."""
+    y = d.outcomes[0].y
+    fold_models = cache.get(
+        "decision_fold_models",
+        lambda: [
+            fit_spec(d, y, tr, spec, cfg)
+            for tr, _ in tqdm(folds, desc="decision: fold models", leave=False)
+        ],
+    )
+
+    def simulate(reading: str) -> dict[str, FloatArray]:
+        return measured_oof(
+            d, fold_models, folds, reading, MEASURED_DRAWS, MEASURED_SEED, sensed_only=True
+        )
+
+    sims = {
+        reading: cache.get(f"decision_measured_{reading}", partial(simulate, reading))
+        for reading in READINGS
+    }
+    served = {
+        op: dict(doc["operating_points"][op]["thresholds_by_knowledge"])
+        for op in ("sens85", "acs_cot")
+    }
+    figures = measured_check(d, cfg, sims, knowledge_groups(d), served)
+    return check_document(doc, _round(figures))
+
+
+def served_spec(doc: dict[str, Any]) -> Spec:
+    """The ISS 15+ spec an artifact document serves (its groups, kind, penalty and trees)."""
+    iss = doc["outcomes"]["iss15"]
+    return Spec(
+        groups=tuple(iss["groups"]),
+        c=float(iss["penalty_c"]),
+        drift=str(doc["drift"]["chosen"]),
+        kind=str(iss["kind"]),
+        n_trees=int(iss.get("trees_per_member") or 0),
+        tree_groups=tuple(iss.get("tree_groups") or ()),
+        weight=float(iss["selection"].get("blend_weight") or 0.0),
+    )
+
+
+def check_served(doc: dict[str, Any], cache_dir: Path | None) -> dict[str, Any]:
+    """The measured-delta-V check of a served artifact `doc`, without refitting its selection.
+
+    The folds by crash and each fold's model follow from `doc`'s settings and
+    spec (:func:`served_spec`), so the check of a shipped artifact can be run
+    (or re-run, resuming from the same stage cache as ``fit-field``) apart from
+    the whole fit: ``aacn-triage fit-field --check-measured``.
+    """
+    cfg = RiskConfig(
+        **{k: tuple(v) if isinstance(v, list) else v for k, v in doc["config"].items()}
+    )
+    d = load_risk_data(cfg.subsample, cfg.seed)
+    cache = _Cache(cache_dir, cfg.key())
+    return _measured_stage(d, cfg, cache, served_spec(doc), crash_folds_cached(d, cfg), doc)
 
 
 def _old_document(version: str) -> dict[str, Any]:

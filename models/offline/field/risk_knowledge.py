@@ -63,6 +63,7 @@ __all__ = [
     "donor_table_of",
     "integrated_oof",
     "knowledge_extras",
+    "knowledge_groups",
 ]
 
 #: What a telematics unit does not sense of an occupant (integrated over).
@@ -197,23 +198,12 @@ def knowledge_extras(
     age = np.asarray(d.arrays["age_years"], dtype=np.float64)
     child = age < CHILD_MAX_AGE_YEARS
     adult = ~child
-    restraint = np.asarray(d.arrays["restraint"], dtype=object)
 
     def res(mask: np.ndarray, seed: int) -> list[IntArray]:
         idx = np.flatnonzero(mask)
         return [idx[r] for r in crash_resamples(d.crash[idx], cfg.n_metric_bootstrap, seed)]
 
-    groups = {
-        "children": child,
-        "children 0-4": child & (age < 5),
-        "children 5-9": child & (age >= 5) & (age < 10),
-        "children 10-15": child & (age >= 10),
-        "children in a child seat": child & (restraint == "child_seat"),
-        "adults": adult,
-        "adults 16-44": adult & (age < 45),
-        "adults 45-64": adult & (age >= 45) & (age < 65),
-        "adults 65+": adult & (age >= 65),
-    }
+    groups = knowledge_groups(d)
     out: dict[str, Any] = {"age_sent": {}, "sensed_only": {}}
     for k, (name, mask) in enumerate(tqdm(groups.items(), desc="knowledge figures", leave=False)):
         if not mask.any() or y[mask].sum() == 0:
@@ -285,6 +275,25 @@ def knowledge_extras(
             thresholds[op][know]["figures"] = figs
     out["thresholds_by_knowledge"] = thresholds
     return out
+
+
+def knowledge_groups(d: RiskData) -> dict[str, np.ndarray]:
+    """The figures' groups by age (children apart) and child seat: name -> mask, shape (n,)."""
+    age = np.asarray(d.arrays["age_years"], dtype=np.float64)
+    child = age < CHILD_MAX_AGE_YEARS
+    adult = ~child
+    restraint = np.asarray(d.arrays["restraint"], dtype=object)
+    return {
+        "children": child,
+        "children 0-4": child & (age < 5),
+        "children 5-9": child & (age >= 5) & (age < 10),
+        "children 10-15": child & (age >= 10),
+        "children in a child seat": child & (restraint == "child_seat"),
+        "adults": adult,
+        "adults 16-44": adult & (age < 45),
+        "adults 45-64": adult & (age >= 45) & (age < 65),
+        "adults 65+": adult & (age >= 65),
+    }
 
 
 def _child_columns() -> tuple[str, ...]:

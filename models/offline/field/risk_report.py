@@ -32,6 +32,7 @@ __all__ = [
     "ONSTAR_VEHICLE_AUC",
     "acceptance",
     "default_report_dir",
+    "rewrite_card_text",
     "tier_lines",
     "write_risk_model_card",
 ]
@@ -555,16 +556,16 @@ def _regions(doc: dict[str, Any]) -> list[str]:
     return lines
 
 
-def _knowledge(doc: dict[str, Any]) -> list[str]:
+def _knowledge(doc: dict[str, Any], check: dict[str, Any] | None) -> list[str]:
     if "unknowns" not in doc:
         return []
     out = ["## Children, and what a car senses", *knowledge_lines(doc), ""]
     if "measurement_model" in doc:
-        out += ["## Measured delta-V", *measured_lines(doc), ""]
+        out += ["## Measured delta-V", *measured_lines(doc, check), ""]
     return out
 
 
-def _card(doc: dict[str, Any]) -> str:
+def _card(doc: dict[str, Any], check: dict[str, Any] | None = None) -> str:
     iss = doc["outcomes"]["iss15"]
     v = doc["vehicle"]["heldout"]
     cfg = doc["config"]
@@ -657,7 +658,7 @@ def _card(doc: dict[str, Any]) -> str:
         "vehicle's probability is never below its riskiest occupant's P(ISS 15+) (these "
         "figures are of the recalibrated value before that floor).",
         "",
-        *_knowledge(doc),
+        *_knowledge(doc, check),
         "## Region risk",
         *(
             [
@@ -682,7 +683,6 @@ def _card(doc: dict[str, Any]) -> str:
             f"| {a} | {'yes' if ok else '**no**'} | {fig} |"
             for a, ok, fig in (knowledge_acceptance(doc) if "unknowns" in doc else [])
         ],
-
         "",
         "## Limits",
         (
@@ -714,6 +714,12 @@ def write_risk_model_card(fit: RiskFit, out_dir: Path) -> Path:
     _reliability_plot(out_dir / PLOTS["reliability"], fit)
     _curves_plot(out_dir / PLOTS["curves"], model)
     _regions_plot(out_dir / PLOTS["regions"], doc)
+    check = fit.figures.get("measured_check")
+    return rewrite_card_text(doc, check, out_dir)
+
+
+def rewrite_card_text(doc: dict[str, Any], check: dict[str, Any] | None, out_dir: Path) -> Path:
+    """Write ``MODEL_CARD.md`` of `doc` (and its measured check) in `out_dir`; plots untouched."""
     path = out_dir / "MODEL_CARD.md"
-    path.write_text(_card(doc), encoding="utf-8")
+    path.write_text(_card(doc, check), encoding="utf-8")
     return path

@@ -19,13 +19,7 @@ from tqdm import tqdm
 from models.arrays import FloatArray, IntArray
 from models.field.features import FieldInputs, FieldMode
 from models.field.measurement import (
-    EARLY_ERA_SHARE,
-    ERA_RATIOS,
-    LATE_ERA_FIRST_YEAR,
-    MEASURED_TOLERANCE_SD,
     MEASUREMENT_MODEL,
-    QUADRATURE_POINTS,
-    SD_KMH,
 )
 from models.field.model import FieldModel
 from models.field.risk_children import ALL_COLUMNS_3
@@ -92,7 +86,11 @@ MODEL_NAME: Final[str] = "field_iss15"
 #: measured delta-V read through the delta-V measurement model
 #: (:mod:`models.field.measurement`); thresholds by what is known (adults, children,
 #: ages unknown; each with a measured delta-V).
-MODEL_VERSION: Final[str] = "3.3.0"
+#: 3.3.1 (2026-12-07): the same fitted models and thresholds; a measured delta-V read
+#: through the measurement model 1.2.0 (a side crash's ratio of its own, Johnson &
+#: Gabler), and the held-out check of that reading with measured delta-V
+#: (:mod:`.risk_measured`, the model card and ``docs/field/measured_check.json``).
+MODEL_VERSION: Final[str] = "3.3.1"
 
 #: Groups of the plain regression: linear main effects of every notification
 #: field, unpenalised, no splines or interactions (the reference to match).
@@ -675,16 +673,7 @@ def _document(
             "donors": donor_table_of(d, np.arange(d.x.shape[0])).to_document(),
             "figures": _round(extras["knowledge"]),
         },
-        "measurement_model": {
-            "name": MEASUREMENT_MODEL.name,
-            "version": MEASUREMENT_MODEL.version,
-            "era_ratios": list(ERA_RATIOS),
-            "late_era_first_year": LATE_ERA_FIRST_YEAR,
-            "early_era_share": EARLY_ERA_SHARE,
-            "sd_kmh": SD_KMH,
-            "measured_tolerance_sd": MEASURED_TOLERANCE_SD,
-            "quadrature_points": QUADRATURE_POINTS,
-        },
+        "measurement_model": MEASUREMENT_MODEL.document(),
         "default_operating_point": "sens85",
         "tiers": _round(extras["tiers"]),
         "comparisons": _round(

@@ -21,8 +21,11 @@ from models.offline.field.readme import (
     readme_block,
     readme_path,
 )
+from models.offline.field.risk_measured import CHECK_FILE, load_check
+from models.offline.field.risk_report import default_report_dir
 
 DOC = json.loads(default_artifact_path().read_text(encoding="utf-8"))
+CHECK = load_check(DOC, default_report_dir() / CHECK_FILE)
 
 
 @pytest.fixture(scope="module")
@@ -33,7 +36,7 @@ def answer() -> dict[str, object]:
 def test_the_readme_block_is_the_shipped_artifacts(answer: dict[str, object]) -> None:
     text = readme_path().read_text(encoding="utf-8")
     start, end = text.index(BEGIN), text.index(END) + len(END)
-    assert text[start:end] == readme_block(DOC, answer)
+    assert text[start:end] == readme_block(DOC, answer, CHECK)
 
 
 def test_the_readme_example_is_the_one_in_try_it() -> None:

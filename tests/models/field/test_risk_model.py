@@ -65,7 +65,7 @@ def _driver(dv: float, **kw: object) -> RiskInputs:
 def test_the_shipped_artifact_loads_with_every_outcome(model: RiskModel) -> None:
     assert model.outcome == OUTCOME == "ISS15+"
     assert model.name == "field_iss15"
-    assert model.version == "3.3.0"
+    assert model.version == "3.3.1"
     assert model.candidate_columns == ALL_COLUMNS_3
     assert set(model.regions) == set(REGION_NAMES)
     assert model.default_operating_point == "sens85"

@@ -180,25 +180,39 @@ def test_substitute_expands_only_the_unknown_inputs() -> None:
 
 
 def test_a_measured_delta_v_stands_for_a_smaller_reconstruction() -> None:
-    """The measurement model's nodes: weights summing to one, centred on the era-weighted
-    ratio times the measurement (Niehoff & Gabler's 23 %, the reference's 19 %), within the
-    measurement's own tolerance; every node a positive delta-V."""
+    """The measurement model's nodes: weights summing to one, centred on the direction's
+    ratio times the measurement (frontal and rear: the two NASS-CDS/EDR comparisons, 23 %
+    and 19 % under, weighted by their cases; side: Johnson & Gabler's, nearly one), within
+    the measurement's own tolerance; every node a positive delta-V."""
     from models.field.measurement import (
-        EARLY_ERA_SHARE,
-        ERA_RATIOS,
+        LONGITUDINAL_RATIO,
         MEASURED_TOLERANCE_SD,
+        SIDE_RATIO,
         over_reconstructed_nodes,
         reconstructed_nodes,
     )
 
+    assert LONGITUDINAL_RATIO == pytest.approx((121 * 0.77 + 228 * 0.81) / 349, abs=5e-4)
+    assert SIDE_RATIO == pytest.approx((1.129 + 1.024) / 2 / 1.10, abs=5e-4)
+    for pdof, ratio in ((0.0, LONGITUDINAL_RATIO), (180.0, LONGITUDINAL_RATIO)):
+        values, weights = reconstructed_nodes(50.0, pdof)
+        assert weights.sum() == pytest.approx(1.0)
+        assert float(values @ weights) == pytest.approx(50.0 * ratio, rel=1e-12)
+    for pdof in (60.0, 90.0, 270.0, 300.0):
+        values, weights = reconstructed_nodes(50.0, pdof)
+        assert float(values @ weights) == pytest.approx(50.0 * SIDE_RATIO, rel=1e-12)
+    # the sectors' edges: 45 deg is side, 135 deg is rear (crash_mode_codes' sectors)
+    assert reconstructed_nodes(50.0, 45.0)[0][1] == pytest.approx(50.0 * SIDE_RATIO)
+    assert reconstructed_nodes(50.0, 135.0)[0][1] == pytest.approx(50.0 * LONGITUDINAL_RATIO)
     values, weights = reconstructed_nodes(50.0)
-    assert weights.sum() == pytest.approx(1.0)
-    mean_ratio = EARLY_ERA_SHARE * ERA_RATIOS[0] + (1 - EARLY_ERA_SHARE) * ERA_RATIOS[1]
-    assert float(values @ weights) == pytest.approx(50.0 * mean_ratio, rel=1e-12)
-    assert values.min() > 50.0 * ERA_RATIOS[0] * (1 - 3 * MEASURED_TOLERANCE_SD)
-    assert values.max() < 50.0 * ERA_RATIOS[1] * (1 + 3 * MEASURED_TOLERANCE_SD)
+    assert values.min() > 50.0 * LONGITUDINAL_RATIO * (1 - 3 * MEASURED_TOLERANCE_SD)
+    assert values.max() < 50.0 * LONGITUDINAL_RATIO * (1 + 3 * MEASURED_TOLERANCE_SD)
     assert np.all(reconstructed_nodes(0.5)[0] >= 1.0)
-    arrays = {"delta_v_kmh": np.array([30.0, 50.0]), "restraint": ["belted", "none"]}
+    arrays = {
+        "delta_v_kmh": np.array([30.0, 50.0]),
+        "pdof_deg": np.array([0.0, 0.0]),
+        "restraint": ["belted", "none"],
+    }
     out, owner, w = over_reconstructed_nodes(
         arrays, np.array([0, 1]), np.array([1.0, 1.0]), {1: 50.0}
     )
@@ -207,3 +221,21 @@ def test_a_measured_delta_v_stands_for_a_smaller_reconstruction() -> None:
     assert np.allclose(out["delta_v_kmh"][1:], values)  # type: ignore[index]
     assert np.allclose(w[1:], weights)
     assert out["restraint"] == ["belted"] + ["none"] * values.size
+
+
+def test_the_earlier_measurement_model_still_reads_as_it_did() -> None:
+    """1.1.0 (field model 3.3.0's): both eras' ratios mixed by the population's years, for
+    every direction; an artifact names its version and is read through it."""
+    from models.field.measurement import (
+        EARLY_ERA_SHARE,
+        ERA_RATIOS,
+        MEASUREMENT_MODELS,
+        reconstructed_nodes,
+    )
+
+    old = MEASUREMENT_MODELS["1.1.0"]
+    mean_ratio = EARLY_ERA_SHARE * ERA_RATIOS[0] + (1 - EARLY_ERA_SHARE) * ERA_RATIOS[1]
+    for pdof in (0.0, 90.0):
+        values, weights = reconstructed_nodes(50.0, pdof, old)
+        assert values.size == 6
+        assert float(values @ weights) == pytest.approx(50.0 * mean_ratio, rel=1e-12)
