@@ -8,7 +8,7 @@ The baseline commit is checked out into a temporary git worktree and run from
 its own tree (``PYTHONPATH`` pointing at it, this environment's packages); the
 current tree is this checkout. Each tree, in turn, in fresh processes with the
 image's settings (``NUMBA_CPU_NAME=generic``, a numba cache directory of its own
-filled by the image's warm-up step):
+filled by the image's warm-up step, one BLAS thread as the service runs):
 
 * **start to ready**: ``serve --workers 1`` on a fresh SQLite file, process start
   to the first 200 of ``/readyz``, the numba cache filled (as in the image);
@@ -182,6 +182,7 @@ def _env(tree: Path, cache: Path, db: Path) -> dict[str, str]:
         **os.environ,
         "PYTHONPATH": str(tree),
         "NUMBA_CPU_NAME": "generic",
+        "OPENBLAS_NUM_THREADS": "1",  # as the service caps them (settings.blas_threads)
         "NUMBA_CACHE_DIR": str(cache),
         "AACN_NUMBA_CACHE_DIR": str(cache),
         "AACN_DATABASE_URL": f"sqlite:///{db}",
