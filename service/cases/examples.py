@@ -249,7 +249,7 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         },
         "triage_code": {
             "version": "0.2.0",
-            "sha256": "76feb923dd519531f5aa9cc9a1747b965e5660d2e90df0dcee621a48c6156259",
+            "sha256": "756cca8746156318a33939f9731f1d3e7039ea3ec783c388f1e6acb264a1dbd4",
         },
         "risk_calibration": {
             "version": "1",
