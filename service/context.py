@@ -65,6 +65,7 @@ def engine_models_for(settings: Settings) -> EngineModels:
         posture_sd_deg=settings.posture_sd_deg,
         seat_track_sd_mm=settings.seat_track_sd_mm,
         surrogate_dir=settings.surrogate_dir,
+        blas_threads=settings.blas_threads,
     )
     field = models.field
     if (

@@ -562,15 +562,21 @@ class SurrogateFamily:
             xc[_SEAT] + seat_track_sd_mm * _NORMALS[:, 1], self._lo[_SEAT], self._hi[_SEAT]
         )
         w = self._weights_at(float(xc[0]))
-        # a weight of exactly 1 (inside one piece) multiplies nothing: x * 1.0 == x
-        parts = [
-            self._pieces[i].samples(xc[None, :], post, seat)
-            if wi == 1.0
-            else wi * self._pieces[i].samples(xc[None, :], post, seat)
-            for i, wi in enumerate(w)
-            if wi > 0.0
-        ]
-        return parts[0] if len(parts) == 1 else parts[0] + parts[1]
+        # a weight of exactly 1 (inside one piece) multiplies nothing: x * 1.0 == x;
+        # in a blend zone each piece's fresh array is weighted and summed in place
+        # (the same products and sum as ``w0 * a + w1 * b``, without two temporaries)
+        out: FloatArray | None = None
+        for i, wi in enumerate(w):
+            if wi > 0.0:
+                part = self._pieces[i].samples(xc[None, :], post, seat)
+                if wi != 1.0:
+                    np.multiply(part, wi, out=part)
+                if out is None:
+                    out = part
+                else:
+                    np.add(out, part, out=out)
+        assert out is not None, "every delta-V has a piece of positive weight"
+        return out
 
     def _p_and_interval(
         self, raw: FloatArray, age_years: float | None

@@ -8,6 +8,8 @@ from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
 
+from threadpoolctl import threadpool_limits  # type: ignore[import-untyped]
+
 from models import ENGINE_VERSION
 from models.baseline.logistic import BaselineModel, load_default
 from models.constants import DEFAULT_POSTURE_SD_DEG, DEFAULT_SEAT_TRACK_SD_MM
@@ -236,8 +238,21 @@ def load_engine_models(
     use_surrogates: bool = True,
     use_field: bool = True,
     warm: bool = True,
+    blas_threads: int | None = 1,
 ) -> EngineModels:
     """Load and verify the shipped model artifacts, and warm the compiled kernels.
+
+    Also caps this process's BLAS threads at `blas_threads` (None: leaves them as
+    they are). The engine's matrix products are small (the surrogate
+    propagation's largest is 97 x 57 by 57 x 906, its kriging 97 x 5 by 5 x
+    1000): on more than one thread OpenBLAS only adds hand-overs, and on a busy
+    machine its spinning threads wait for cores. [R] Issue 51, the two-occupant
+    notification of ``benchmarks/bench_speed.py`` on this 2-core box at load
+    average 5-8: 134-187 ms per occupant with OpenBLAS's default of one thread
+    per core, 16-20 ms with one (the service always capped them:
+    ``service.context.limit_blas_threads``, measured there 2026-12-04). One
+    thread is also what the service runs, so a triage in any process gives the
+    service's bits.
 
     Raises
     ------
@@ -247,6 +262,8 @@ def load_engine_models(
     ThresholdOrderError
         (a ValueError) When `high_threshold` lies below an operating threshold in use.
     """
+    if blas_threads is not None:
+        threadpool_limits(limits=blas_threads, user_api="blas")
     field_model: AnyFieldModel | None = None
     if use_field:
         field_model = (

@@ -249,7 +249,7 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         },
         "triage_code": {
             "version": "0.2.0",
-            "sha256": "ba6eaaf1a72caf0b0eacb900d9218efe21b6169716ef53ad8f424c275c2114cc",
+            "sha256": "77c3db72e4ea60ffd450f77e8f57c4f7fe5a6f53d4cf18a97bb856c663a81497",
         },
         "risk_calibration": {
             "version": "1",
