@@ -84,7 +84,8 @@ def write_artifact(
 #: ``{'descr': '<f8', 'fortran_order': False, 'shape': (3, 4), }`` padded with spaces.
 _NPY_HEADER = re.compile(
     r"\{'descr': '([<>|=][a-z]\d+)', 'fortran_order': (False|True), "
-    r"'shape': \(((?:\d+, ?)*\d*)\), \} *\n"
+    r"'shape': \(((?:\d+, ?)*\d*)\), \} *\n",
+    re.ASCII,
 )
 #: Magic string of the ``.npy`` format.
 _NPY_MAGIC = b"\x93NUMPY"
