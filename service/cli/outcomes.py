@@ -82,6 +82,8 @@ def _run_recalibrate(args: argparse.Namespace) -> int:
                 out_dir=out_dir,
                 dry_run=args.dry_run,
                 local_dirs=(settings.local_model_dir,),
+                high_threshold=settings.high_risk_threshold,
+                operating_point=settings.operating_point,
             )
     except TooFewOutcomes as exc:
         _say(f"refused: {exc}", err=True)

@@ -38,6 +38,8 @@ from models.field.recalibration import (
 )
 from models.field.risk_model import RiskModel
 from models.field.versions import artifact_versions
+from models.tiers import HIGH_RISK_THRESHOLD, check_threshold_order
+from models.triage.loading import operating_thresholds
 from service.db import repository
 from service.outcomes.quality import SERIOUS_ISS
 
@@ -122,14 +124,22 @@ def recalibrate(
     out_dir: Path,
     dry_run: bool = False,
     local_dirs: Sequence[Path] = (),
+    high_threshold: float = HIGH_RISK_THRESHOLD,
+    operating_point: str | None = None,
 ) -> RecalibrationResult:
     """Fit, check and write the recalibration of `served` on the linked local outcomes.
+
+    `high_threshold` and `operating_point` are the service's (AACN_HIGH_RISK_THRESHOLD,
+    AACN_OPERATING_POINT): a recalibration whose mapped thresholds would rise above the
+    high tier's is refused here, not written to be refused by the service at start.
 
     Raises
     ------
     TooFewOutcomes
         Too few (effective) linked ISS 15+ outcomes (the message says how many are
         needed and why).
+    ThresholdOrderError
+        (a ValueError) A mapped operating threshold above `high_threshold`.
     ValueError
         A bad site name.
     """
@@ -154,6 +164,7 @@ def recalibrate(
         cases=data.cases,
     )
     new = RiskModel.from_document(doc)  # verified as the loader will verify the file
+    check_threshold_order(high_threshold, operating_thresholds(new, operating_point, None))
     thresholds = {
         name: (served.thresholds[name], new.thresholds[name]) for name in served.thresholds
     }

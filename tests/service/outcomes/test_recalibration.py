@@ -27,7 +27,9 @@ import pytest
 from models.field.recalibrated import cases_sha256
 from models.field.recalibration import MIN_EFFECTIVE_EVENTS
 from models.field.risk_model import RiskModel, load_default
+from models.tiers import ThresholdOrderError
 from service.cli import main as cli
+from service.outcomes.recalibrate import recalibrate
 from service.settings import get_settings
 from tests.conftest import _api
 from tests.support import ApiClient, post_case, summary
@@ -162,6 +164,11 @@ def test_recalibrate_refuses_then_writes_a_version_rescore_compares_and_serves(
     assert cli.main(["outcomes", "recalibrate", "--site", "county-x", "--dry-run"]) == 0
     assert "dry run: nothing written" in capsys.readouterr().out
     assert cli.main(["outcomes", "recalibrate", "--site", "County X"]) == 2  # a bad site name
+    # a map that would lift an operating threshold above the high tier is refused, unwritten
+    sessions = env_api.client.app.state.ctx.sessions  # type: ignore[attr-defined]
+    with pytest.raises(ThresholdOrderError, match="high-risk threshold"):
+        recalibrate(sessions, served, site="county-x", out_dir=local, high_threshold=0.001)
+    assert not local.exists() or not list(local.iterdir())
     capsys.readouterr()
     assert cli.main(["outcomes", "recalibrate", "--site", "county-x"]) == 0
     out = capsys.readouterr().out
