@@ -53,34 +53,14 @@ from typing import Any
 from results_md import RESULTS, write_section
 
 ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))  # the tests' notifications (tests/decision_pins.py)
+from tests.decision_pins import readme_two_occupants  # noqa: E402
+
 NASS = ROOT / "models" / "offline" / "data" / "nass-cds-1997-2014-occupants.csv.gz"
 
-#: The README's "Try it" notification with issue 51's second occupant.
-TWO_OCCUPANTS: dict[str, Any] = {
-    "event_id": "tsp-0001",
-    "occurred_at": "2026-11-23T08:15:30Z",
-    "crash": {"pulse": {"kind": "summary", "delta_v_kmh": 40, "pdof_deg": 0}},
-    "occupants": [
-        {
-            "seat": "driver",
-            "stature_cm": 178,
-            "mass_kg": 80,
-            "age_years": 42,
-            "sex": "male",
-            "belted": True,
-            "frontal_airbag": "deployed",
-        },
-        {
-            "seat": "front_passenger",
-            "stature_cm": 160,
-            "mass_kg": 55,
-            "age_years": 38,
-            "sex": "female",
-            "belted": True,
-            "frontal_airbag": "deployed",
-        },
-    ],
-}
+#: The README's "Try it" notification with issue 51's second occupant (the one the
+#: decision pins hold too).
+TWO_OCCUPANTS: dict[str, Any] = readme_two_occupants()
 
 #: NASS-CDS seat position codes -> the wire's seats.
 _SEATS = {
@@ -217,7 +197,6 @@ def _serve(tree: Path, env: dict[str, str], requests: int) -> dict[str, float]:
     import urllib.error
     import urllib.request
 
-    sys.path.insert(0, str(ROOT))
     from tests.support import free_port
 
     py = sys.executable

@@ -24,6 +24,7 @@ from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
+from models.offline.field.readme import README_EXAMPLE
 from tests.paths import ROOT
 
 PINS_PATH = ROOT / "tests" / "decision_pins.json"
@@ -37,15 +38,7 @@ FLOAT_PATH_ENV = (
     "GLIBC_TUNABLES",
 )
 
-_DRIVER = {
-    "seat": "driver",
-    "stature_cm": 178,
-    "mass_kg": 80,
-    "age_years": 42,
-    "sex": "male",
-    "belted": True,
-    "frontal_airbag": "deployed",
-}
+_DRIVER = README_EXAMPLE["occupants"][0]  # the README's belted 42-year-old driver
 #: The second occupant of issue 51's benchmark notification.
 FRONT_PASSENGER = {
     "seat": "front_passenger",
