@@ -5,7 +5,6 @@ from __future__ import annotations
 import logging
 from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
-from pathlib import Path
 from typing import Any
 
 from fastapi import FastAPI
@@ -13,7 +12,7 @@ from fastapi.staticfiles import StaticFiles
 from starlette.responses import Response
 
 from models.triage import ThresholdOrderError
-from service import __version__, health, session_secret
+from service import __version__, health, session_secret, sign_in
 from service.auth import caller_of_row
 from service.balance import ConnectionBalance, WorkerLoads
 from service.cases import endpoints as cases
@@ -28,8 +27,10 @@ from service.middleware import BodySizeLimit, ResponseHeaders
 from service.nemsis import endpoints as nemsis
 from service.openapi import document_validation_problems, install_offline_docs, operation_id
 from service.outcomes import endpoints as outcomes
+from service.outcomes import page_endpoints as quality_page
 from service.outcomes.drift import DriftCollector
 from service.outcomes.quality import current_drift, drift_settings_of
+from service.page_frame import STATIC_DIR
 from service.pages import endpoints as pages
 from service.problems import install_problem_handlers
 from service.settings import Settings, get_settings
@@ -38,10 +39,6 @@ __all__ = ["create_app"]
 
 
 log = logging.getLogger("aacn_triage")
-
-
-#: The pages' stylesheet and icon (package data).
-STATIC_DIR = Path(__file__).resolve().parent / "pages" / "static"
 
 
 class _StaticFiles(StaticFiles):
@@ -166,5 +163,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.include_router(nemsis.router)
     app.include_router(outcomes.router)
     app.include_router(pages.router)
+    app.include_router(quality_page.router)
+    app.include_router(sign_in.router)
     app.mount("/static", _StaticFiles(directory=STATIC_DIR), name="static")
     return app

@@ -36,6 +36,8 @@ ROUTERS = (
     "service.pages.endpoints",
     "service.nemsis.endpoints",
     "service.outcomes.endpoints",
+    "service.outcomes.page_endpoints",
+    "service.sign_in",
     "service.health",
 )
 #: Longest module (lines) in service/ and models/triage/, longest function (lines) in
@@ -253,9 +255,6 @@ ALLOWED_EDGES = {
     # (JSON or VEDS XML), so FastAPI cannot see the body's model; the document names it,
     # its examples and the XML media type from the cases
     ("service.openapi", "service.cases"): "the document of the body POST /v1/cases reads",
-    # the quality page shows the outcomes' quality report: the dispatcher's pages are the
-    # one place a person reads it
-    ("service.pages", "service.outcomes"): "the quality page shows the outcomes' report",
 }
 
 
@@ -308,9 +307,10 @@ def test_a_feature_imports_no_other_feature_and_the_infrastructure_none() -> Non
 
 def test_the_rooms_rule_can_fail() -> None:
     """A deliberate violation of each kind is caught (the check is not vacuous)."""
-    packages = {"cases", "db", "cli", "pages", "nemsis", "jobs"}
+    packages = {"cases", "db", "cli", "pages", "nemsis", "jobs", "outcomes"}
     graph = {
         "service.nemsis.endpoints": {"service.pages.views", "service.cases.result"},
+        "service.pages.endpoints": {"service.outcomes.quality", "service.page_frame"},
         "service.jobs.batch": {"service.cli.common", "service.db.repository"},
         "service.auth": {"service.pages.endpoints", "service.problems"},
         "service.metrics": {"service.cases.service"},
@@ -319,6 +319,7 @@ def test_the_rooms_rule_can_fail() -> None:
     }
     assert feature_violations(graph, packages) == {
         ("service.nemsis.endpoints", "service.pages.views"),
+        ("service.pages.endpoints", "service.outcomes.quality"),
         ("service.jobs.batch", "service.cli.common"),
         ("service.auth", "service.pages.endpoints"),
         ("service.metrics", "service.cases.service"),

@@ -1,1 +1,2 @@
-"""The dispatcher's pages: the case list and the case page (HTML), and their sign-in."""
+"""The dispatcher's pages: the case list and the case page (HTML), in the pages' frame
+(``service.page_frame``; signing in: ``service.sign_in``)."""

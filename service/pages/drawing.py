@@ -16,6 +16,8 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
+from service.axis_ticks import nice_ticks
+
 __all__ = [
     "BODY_REGIONS",
     "Arrow",
@@ -27,7 +29,6 @@ __all__ = [
     "SeatMark",
     "Series",
     "car_diagram",
-    "nice_ticks",
     "probability_bar",
     "pulse_plot",
 ]
@@ -298,21 +299,6 @@ class Plot:
     bottom: float = PLOT_H - PLOT_BOTTOM
     width: float = PLOT_W
     height: float = PLOT_H
-
-
-def nice_ticks(lo: float, hi: float, target: int = 5) -> list[float]:
-    """Round tick values spanning [lo, hi] (1, 2, 5 x 10^n steps)."""
-    if not (math.isfinite(lo) and math.isfinite(hi)):
-        return [0.0, 1.0]
-    if hi - lo < 1e-9:
-        lo, hi = lo - 1.0, hi + 1.0
-    raw = (hi - lo) / max(target, 1)
-    mag = 10.0 ** math.floor(math.log10(raw))
-    step = next(m * mag for m in (1.0, 2.0, 5.0, 10.0) if m * mag >= raw)
-    start = math.floor(lo / step) * step
-    stop = math.ceil(hi / step) * step
-    n = round((stop - start) / step)
-    return [round(start + i * step, 10) for i in range(n + 1)]
 
 
 def _fmt_tick(v: float) -> str:

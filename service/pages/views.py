@@ -7,8 +7,9 @@ versions it was decided with. The stored documents are read as plain JSON, not
 through today's wire models, so an older stored shape still renders (for
 instance `assumptions` as strings, or as objects with a `message`).
 
-Templates: ``service/pages/templates/`` (Jinja2, autoescaped); stylesheet
-``service/pages/static/report.css``; drawings: :mod:`service.pages.drawing`.
+Templates: ``service/pages/templates/`` (Jinja2, autoescaped), in the pages' frame
+(``service.page_frame``: ``base.html``, the stylesheet ``service/static/report.css``);
+drawings: :mod:`service.pages.drawing`.
 """
 
 from __future__ import annotations
@@ -22,13 +23,12 @@ from pathlib import Path
 from typing import Any, TypeVar
 from urllib.parse import urlencode
 
-from jinja2 import Environment, FileSystemLoader, StrictUndefined, select_autoescape
-
 from models.impact_mode import ImpactMode
 from models.injury.limits import SIDE_MODES, InjuryLimit, injury_limit
 from models.notification import Body, Seat
 from service.cases.result import derive_tiers
 from service.db.repository import CaseRecord
+from service.page_frame import template_environment
 from service.pages import text as wording
 from service.pages.drawing import (
     BODY_REGIONS,
@@ -53,18 +53,12 @@ __all__ = [
 TEMPLATES_DIR = Path(__file__).resolve().parent / "templates"
 
 #: One environment per process: templates compile once and are cached.
-_ENV = Environment(
-    loader=FileSystemLoader(TEMPLATES_DIR),
-    autoescape=select_autoescape(default=True, default_for_string=True),
-    undefined=StrictUndefined,
-    trim_blocks=True,
-    lstrip_blocks=True,
-    auto_reload=False,
-)
+_ENV = template_environment(TEMPLATES_DIR)
 
 
 def render(template: str, **context: Any) -> str:
-    """Render one template of ``service/pages/templates/``."""
+    """Render one template of ``service/pages/templates/`` (in the frame of
+    ``service/templates/base.html``)."""
     return _ENV.get_template(template).render(**context)
 
 

@@ -12,7 +12,7 @@ from fastapi.testclient import TestClient
 
 from service.security_headers import HSTS_VALUE
 from tests.paths import ROOT
-from tests.service.pages.test_pages_browser import chromium  # noqa: F401  (the fixture)
+from tests.service.browser_support import chromium  # noqa: F401  (the fixture)
 from tests.support import ApiClient, console_server
 
 

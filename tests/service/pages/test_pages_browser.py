@@ -2,56 +2,29 @@
 
 The service runs as a real process (``python -m service.cli serve`` on a free
 port, a temporary SQLite file, keys made with ``keys create``), real cases are
-POSTed to it, and Chromium signs in through the form like a dispatcher would.
-
-Chromium: ``$AACN_TEST_CHROMIUM``, else Debian's ``chromium`` on the PATH, else
-a Playwright-managed build. These tests are skipped, with the reason, only when
-none of them can be started. A screenshot of each page goes to
-``test-artifacts/screenshots/`` (or ``$AACN_TEST_ARTIFACTS/screenshots/``).
+POSTed to it, and Chromium signs in through the form like a dispatcher would
+(the harness: ``tests/service/browser_support.py``). These tests are skipped, with
+the reason, only when no Chromium can be started. A screenshot of each page goes to
+``test-artifacts/screenshots/`` (or ``$AACN_TEST_ARTIFACTS/screenshots/``). The
+quality page's: ``tests/service/outcomes/test_quality_browser.py``.
 """
 
 from __future__ import annotations
 
-import os
-import secrets
-import shutil
-import subprocess
-import sys
-from collections.abc import Callable, Iterator
-from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any
 
-import httpx2 as httpx
 import pytest
 
-from tests.paths import ROOT as REPO
-from tests.service.pages_support import (
-    TIER_VERDICTS,
-    acceleration,
-    head_injury,
-    minor,
-    mixed_tiers,
-    near_side_56,
-    rear_seat_rollover,
-    side_edr,
-)
-from tests.support import create_key, free_port, wait_ready
+from tests.service import browser_support
+from tests.service.browser_support import Served, new_tab, screenshot_dir, shot, sign_in
+from tests.service.pages_support import TIER_VERDICTS
 
 pytestmark = pytest.mark.browser
 
-#: Flags for Chromium on a closed network and as root in a container: no
-#: sandbox, no GPU, no background traffic (which would flood refused connections).
-CHROMIUM_ARGS = [
-    "--headless",
-    "--no-sandbox",
-    "--disable-gpu",
-    "--disable-quic",
-    "--no-first-run",
-    "--disable-background-networking",
-    "--disable-component-update",
-    "--disable-sync",
-]
+#: The harness's fixtures (module-scoped: this module's own browser and service).
+chromium = browser_support.chromium
+served = browser_support.served
+signed_in = browser_support.signed_in
 
 #: The AIS 0 fill of report.css (a region not at risk).
 AIS0_FILL = "rgb(236, 239, 241)"
@@ -68,194 +41,6 @@ TIER_CASE_NAMES = {"high": "near-side-56", "moderate": "head-injury", "none": "m
 TIER_SYMBOLS = {"high": "\u25b2", "moderate": "\u25c6", "none": "\u25cf"}
 
 
-def screenshot_dir() -> Path:
-    """Where the screenshots go (created)."""
-    base = os.environ.get("AACN_TEST_ARTIFACTS")
-    path = (Path(base) if base else REPO / "test-artifacts") / "screenshots"
-    path.mkdir(parents=True, exist_ok=True)
-    return path
-
-
-def _chromium_candidates() -> list[str | None]:
-    found: list[str | None] = []
-    given = os.environ.get("AACN_TEST_CHROMIUM")
-    if given:
-        found.append(given)
-    for name in ("chromium", "chromium-browser", "google-chrome", "google-chrome-stable"):
-        path = shutil.which(name)
-        if path and path not in found:
-            found.append(path)
-    found.append(None)  # a Playwright-managed build, where `playwright install` could fetch one
-    return found
-
-
-@pytest.fixture(scope="module")
-def chromium() -> Iterator[Any]:
-    """A running headless Chromium, or a skip that says why none could be started."""
-    try:
-        from playwright.sync_api import Error, sync_playwright
-    except ImportError as exc:  # pragma: no cover - playwright is in the test extra
-        pytest.skip(f"no Chromium can be started: the playwright package is missing ({exc})")
-    manager = sync_playwright().start()
-    reasons = []
-    browser = None
-    for exe in _chromium_candidates():
-        try:
-            browser = manager.chromium.launch(
-                executable_path=exe, args=CHROMIUM_ARGS, headless=True, timeout=60_000
-            )
-            break
-        except Error as exc:
-            first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-            reasons.append(f"{exe or 'Playwright-managed Chromium'}: {first}")
-    if browser is None:
-        manager.stop()
-        pytest.skip("no Chromium can be started (apt-get install chromium): " + "; ".join(reasons))
-    try:
-        yield browser
-    finally:
-        browser.close()
-        manager.stop()
-
-
-# ---------------------------------------------------------------- the served service
-
-
-@dataclass
-class Served:
-    base: str
-    keys: dict[str, str]
-    #: the served process's database (a test may rewrite a stored case in it)
-    database_url: str = ""
-    #: name -> the stored case (GET /v1/cases/{id})
-    cases: dict[str, dict[str, Any]] = field(default_factory=dict)
-
-    def url(self, name: str) -> str:
-        return f"{self.base}/v1/cases/{self.cases[name]['case_id']}/report"
-
-
-@pytest.fixture(scope="module")
-def served(chromium: Any, tmp_path_factory: pytest.TempPathFactory) -> Iterator[Served]:
-    """The service as a process of its own, with keys and seven real cases."""
-    tmp = tmp_path_factory.mktemp("served")
-    env = {
-        **os.environ,
-        "AACN_DATABASE_URL": f"sqlite:///{tmp / 'served.db'}",
-        "AACN_SESSION_SECRET": secrets.token_urlsafe(32),
-        "AACN_LOG_LEVEL": "WARNING",
-    }
-    cli = [sys.executable, "-m", "service.cli"]
-
-    def key(role: str, name: str) -> str:
-        return create_key(cli, env, role, name, timeout_s=180.0)
-
-    keys = {
-        "auditor": key("auditor", "ems-supervisor"),
-        "submitter": key("submitter", "call-center-north"),
-        "registry": key("registry", "county-trauma-registry"),
-    }
-    port = free_port()
-    log = tmp / "server.log"
-    with log.open("w") as sink:
-        server = subprocess.Popen(
-            [*cli, "serve", "--port", str(port)], env=env, stdout=sink, stderr=subprocess.STDOUT
-        )
-    base = f"http://127.0.0.1:{port}"
-    try:
-        wait_ready(base, server, log, timeout_s=180)  # a cold start on a busy machine
-        out = Served(base=base, keys=keys, database_url=env["AACN_DATABASE_URL"])
-        submit = {"Authorization": f"Bearer {keys['submitter']}"}
-        audit = {"Authorization": f"Bearer {keys['auditor']}"}
-        makers: dict[str, Callable[[], dict[str, Any]]] = {
-            "head-injury": head_injury,
-            "minor": minor,
-            "side-edr": side_edr,
-            "rear-seat-rollover": rear_seat_rollover,
-            "acceleration": acceleration,
-            "near-side-56": near_side_56,
-            "mixed-tiers": mixed_tiers,
-        }
-        for name, make in makers.items():
-            r = httpx.post(base + "/v1/cases", json=make(), headers=submit, timeout=60)
-            assert r.status_code == 201, r.text
-            got = httpx.get(base + r.headers["location"], headers=audit, timeout=30)
-            out.cases[name] = got.json()
-        head = out.cases["head-injury"]["result"]["occupants"][0]["region_ais"]["head_neck"]
-        assert head >= 2, "the head-injury case must have head/neck AIS 2 or more"
-        yield out
-    finally:
-        server.terminate()
-        server.wait(timeout=30)
-
-
-# ---------------------------------------------------------------- pages
-
-
-@dataclass
-class Tab:
-    """A page and the problems it reported (console errors, page errors, failed loads)."""
-
-    page: Any
-    problems: list[str]
-
-
-def _tab(context: Any) -> Tab:
-    page = context.new_page()
-    problems: list[str] = []
-    page.on(
-        "console",
-        lambda m: problems.append(f"console {m.type}: {m.text}") if m.type == "error" else None,
-    )
-    page.on("pageerror", lambda e: problems.append(f"page error: {e}"))
-    # a load cut short by the next navigation (net::ERR_ABORTED) is not a fault of the page
-    page.on(
-        "requestfailed",
-        lambda r: (
-            problems.append(f"failed: {r.url} {r.failure}")
-            if "ERR_ABORTED" not in str(r.failure)
-            else None
-        ),
-    )
-    page.on(
-        "response",
-        lambda r: (
-            problems.append(f"{r.status}: {r.url}")
-            if r.status >= 400 and r.request.resource_type != "document"
-            else None
-        ),
-    )
-    return Tab(page, problems)
-
-
-def _sign_in(tab: Tab, base: str, key: str) -> None:
-    """Sign in through the form, as a person would."""
-    tab.page.goto(f"{base}/v1/session")
-    tab.page.fill("#api_key", key)
-    tab.page.click("#login button[type=submit]")
-    tab.page.wait_for_url(f"{base}/v1/reports")
-
-
-@pytest.fixture(scope="module")
-def signed_in(chromium: Any, served: Served) -> Iterator[Any]:
-    """A browser context that signed in with the auditor key."""
-    context = chromium.new_context(viewport={"width": 1280, "height": 900})
-    tab = _tab(context)
-    _sign_in(tab, served.base, served.keys["auditor"])
-    assert tab.problems == []
-    tab.page.close()
-    try:
-        yield context
-    finally:
-        context.close()
-
-
-def _shot(page: Any, name: str) -> Path:
-    path = screenshot_dir() / f"{name}.png"
-    page.screenshot(path=str(path), full_page=True)
-    assert path.stat().st_size > 1000
-    return path
-
-
 def _pct(p: float) -> str:
     return f"{100 * p:.1f} %"
 
@@ -263,7 +48,7 @@ def _pct(p: float) -> str:
 def test_case_page_shows_the_recommendation_and_interval_without_console_errors(
     served: Served, signed_in: Any
 ) -> None:
-    tab = _tab(signed_in)
+    tab = new_tab(signed_in)
     page = tab.page
     response = page.goto(served.url("head-injury"))
     assert response.status == 200
@@ -287,7 +72,7 @@ def test_case_page_shows_the_recommendation_and_interval_without_console_errors(
     # the stylesheet loaded under the CSP: the decision is framed in its tier's colour
     border = decision.evaluate("e => getComputedStyle(e).borderTopColor")
     assert border == TIER_COLOURS["moderate"]
-    _shot(page, "case-head-injury")
+    shot(page, "case-head-injury")
     assert tab.problems == []
     page.close()
 
@@ -299,7 +84,7 @@ def test_the_banner_shows_each_tier_in_its_colour_symbol_and_words(
     name = TIER_CASE_NAMES[tier]
     triage = served.cases[name]["result"]["triage"]
     assert triage["tier"] == tier, f"{name} must land in the {tier} tier"
-    tab = _tab(signed_in)
+    tab = new_tab(signed_in)
     page = tab.page
     assert page.goto(served.url(name)).status == 200
     decision = page.locator("#decision")
@@ -316,7 +101,7 @@ def test_the_banner_shows_each_tier_in_its_colour_symbol_and_words(
     card = page.locator("#occupant-0")
     assert card.get_attribute("data-tier") == tier
     assert card.evaluate("e => getComputedStyle(e).borderLeftColor") == TIER_COLOURS[tier]
-    _shot(page, f"banner-{tier}")
+    shot(page, f"banner-{tier}")
     assert tab.problems == []
     page.close()
 
@@ -325,7 +110,7 @@ def test_the_banner_summarises_each_occupants_tier(served: Served, signed_in: An
     result = served.cases["mixed-tiers"]["result"]
     tiers = [o["triage"]["tier"] for o in result["occupants"]]
     assert tiers == ["high", "moderate"]
-    tab = _tab(signed_in)
+    tab = new_tab(signed_in)
     page = tab.page
     page.goto(served.url("mixed-tiers"))
     decision = page.locator("#decision")
@@ -338,13 +123,13 @@ def test_the_banner_summarises_each_occupants_tier(served: Served, signed_in: An
         assert item.is_visible()
         assert item.evaluate("e => getComputedStyle(e).color") == TIER_COLOURS[tier]
         assert f"{tier} risk" in item.inner_text()
-    _shot(page, "banner-occupants")
+    shot(page, "banner-occupants")
     assert tab.problems == []
     page.close()
 
 
 def test_the_body_map_marks_the_head_region(served: Served, signed_in: Any) -> None:
-    tab = _tab(signed_in)
+    tab = new_tab(signed_in)
     page = tab.page
     page.goto(served.url("head-injury"))
     ais = served.cases["head-injury"]["result"]["occupants"][0]["region_ais"]
@@ -401,7 +186,7 @@ def test_the_body_map_shows_region_risk_first_and_the_physics_layer_labelled(
 
     occ = served.cases["head-injury"]["result"]["occupants"][0]
     given = occ.get("region_risk") or None
-    tab = _tab(signed_in)
+    tab = new_tab(signed_in)
     page = tab.page
     page.goto(served.url("head-injury"))
     risk = page.locator("#occupant-0 [data-layer=region-risk]")
@@ -417,7 +202,7 @@ def test_the_body_map_shows_region_risk_first_and_the_physics_layer_labelled(
     if given is None:  # an engine without the field region models: the page says so
         assert "unavailable" in (svg.get_attribute("class") or "")
         assert "No field region risk" in (risk.text_content() or "")
-    _shot(page, "bodymap-layers-" + ("with" if given else "without") + "-region-risk")
+    shot(page, "bodymap-layers-" + ("with" if given else "without") + "-region-risk")
     # the same page with a stored region risk: every region coloured, the interval on hover
     _store_region_risk(served, "head-injury", given or REGION_RISK)
     page.goto(served.url("head-injury"))
@@ -445,7 +230,7 @@ def test_a_56_kmh_near_side_case_shows_no_ais_6_and_says_why(
     served: Served, signed_in: Any
 ) -> None:
     """The body map's case: a 56 km/h near-side crash with the side airbags deployed."""
-    tab = _tab(signed_in)
+    tab = new_tab(signed_in)
     page = tab.page
     page.goto(served.url("near-side-56"))
     head = page.locator("#occupant-0 svg.bodymap:not(.riskmap) g[data-region=head_neck]")
@@ -455,13 +240,13 @@ def test_a_56_kmh_near_side_case_shows_no_ais_6_and_says_why(
     assert "cannot represent AIS 6" in (capped.text_content() or "")
     assert page.locator("#occupant-0 li[data-code=side_beyond_tested_severity]").is_visible()
     assert page.locator("#occupant-0 p[data-skill]").is_visible()
-    _shot(page, "case-near-side-56kmh-side-airbags")
+    shot(page, "case-near-side-56kmh-side-airbags")
     assert tab.problems == []
     page.close()
 
 
 def test_every_case_page_shows_the_stored_numbers(served: Served, signed_in: Any) -> None:
-    tab = _tab(signed_in)
+    tab = new_tab(signed_in)
     page = tab.page
     for name, stored in served.cases.items():
         assert page.goto(served.url(name)).status == 200
@@ -487,13 +272,13 @@ def test_every_case_page_shows_the_stored_numbers(served: Served, signed_in: Any
         assert page.locator("#crash svg.car g.pdof").get_attribute("data-pdof-deg") == str(
             result["pulse"]["pdof_deg"]
         )
-        _shot(page, f"case-{name}")
+        shot(page, f"case-{name}")
     assert tab.problems == []
     page.close()
 
 
 def test_the_case_list_filters(served: Served, signed_in: Any) -> None:
-    tab = _tab(signed_in)
+    tab = new_tab(signed_in)
     page = tab.page
     page.goto(f"{served.base}/v1/reports")
 
@@ -502,7 +287,7 @@ def test_the_case_list_filters(served: Served, signed_in: Any) -> None:
 
     ids = {name: c["case_id"] for name, c in served.cases.items()}
     assert sorted(listed()) == sorted(ids.values())
-    _shot(page, "list-all")
+    shot(page, "list-all")
     page.select_option("select[name=iss15_plus]", "false")
     page.click("#filters button[type=submit]")
     page.wait_for_url("**iss15_plus=false**")
@@ -512,7 +297,7 @@ def test_the_case_list_filters(served: Served, signed_in: Any) -> None:
     assert ids["minor"] in not_flagged
     assert len(not_flagged) < len(ids), "the flagged cases are filtered out"
     assert sorted(listed()) == sorted(not_flagged)
-    _shot(page, "list-filtered-no-indication")
+    shot(page, "list-filtered-no-indication")
     page.select_option("select[name=iss15_plus]", "")
     page.select_option("select[name=tier]", "high")
     page.click("#filters button[type=submit]")
@@ -525,14 +310,14 @@ def test_the_case_list_filters(served: Served, signed_in: Any) -> None:
         assert rows.nth(k).locator("td[data-label=Decision]").inner_text().strip() == (
             "\u25b2 High risk"
         )
-    _shot(page, "list-filtered-high-risk")
+    shot(page, "list-filtered-high-risk")
     page.select_option("select[name=tier]", "")
     page.select_option("select[name=iss15_plus]", "")
     page.select_option("select[name=impact_mode]", "near_side")
     page.click("#filters button[type=submit]")
     page.wait_for_url("**impact_mode=near_side**")
     assert sorted(listed()) == sorted([ids["side-edr"], ids["near-side-56"], ids["mixed-tiers"]])
-    _shot(page, "list-filtered-near-side")
+    shot(page, "list-filtered-near-side")
     page.click(f"tr[data-case-id='{ids['side-edr']}'] a")
     page.wait_for_url(served.url("side-edr"))
     assert page.locator("#occupant-1").get_attribute("data-seat") == "front_passenger"
@@ -542,7 +327,7 @@ def test_the_case_list_filters(served: Served, signed_in: Any) -> None:
 
 def test_an_unauthenticated_visit_is_refused(chromium: Any, served: Served) -> None:
     context = chromium.new_context()
-    tab = _tab(context)
+    tab = new_tab(context)
     page = tab.page
     stored = served.cases["head-injury"]
     response = page.goto(served.url("head-injury"))
@@ -552,7 +337,7 @@ def test_an_unauthenticated_visit_is_refused(chromium: Any, served: Served) -> N
     assert stored["event_id"] not in html
     assert _pct(stored["result"]["triage"]["probability"]) not in html
     assert page.locator("#decision").count() == 0
-    _shot(page, "refused-sign-in")
+    shot(page, "refused-sign-in")
     # the only console error is the refused document itself
     assert all("401" in p for p in tab.problems), tab.problems
     # signing in from that form leads back to the case
@@ -567,7 +352,7 @@ def test_an_unauthenticated_visit_is_refused(chromium: Any, served: Served) -> N
 
 def test_a_submitter_key_cannot_sign_in(chromium: Any, served: Served) -> None:
     context = chromium.new_context()
-    tab = _tab(context)
+    tab = new_tab(context)
     tab.page.goto(f"{served.base}/v1/session")
     tab.page.fill("#api_key", served.keys["submitter"])
     tab.page.click("#login button[type=submit]")
@@ -581,21 +366,21 @@ def test_small_screen_and_print(chromium: Any, served: Served) -> None:
     context = chromium.new_context(
         viewport={"width": 390, "height": 844}, device_scale_factor=2, is_mobile=True
     )
-    tab = _tab(context)
+    tab = new_tab(context)
     page = tab.page
-    _sign_in(tab, served.base, served.keys["auditor"])
+    sign_in(tab, served.base, served.keys["auditor"])
     for name in ("head-injury", "side-edr"):
         page.goto(served.url(name))
         width = page.evaluate("[document.documentElement.scrollWidth, window.innerWidth]")
         assert width[0] <= width[1], f"horizontal scroll on a small screen: {width}"
         assert page.locator("#occupant-0 svg.riskmap").is_visible()
         assert page.locator("#occupant-0 svg.bodymap:not(.riskmap)").is_visible()
-        _shot(page, f"case-{name}-small-screen")
+        shot(page, f"case-{name}-small-screen")
     page.emulate_media(media="print")
     page.goto(served.url("head-injury"))
     assert page.locator(".topbar nav").is_hidden()
     assert page.locator("#decision").is_visible()
-    _shot(page, "case-head-injury-print")
+    shot(page, "case-head-injury-print")
     page.pdf(path=str(screenshot_dir() / "case-head-injury.pdf"))
     assert tab.problems == []
     context.close()
@@ -603,9 +388,9 @@ def test_small_screen_and_print(chromium: Any, served: Served) -> None:
 
 def test_logout_ends_the_session(chromium: Any, served: Served) -> None:
     context = chromium.new_context()
-    tab = _tab(context)
+    tab = new_tab(context)
     page = tab.page
-    _sign_in(tab, served.base, served.keys["auditor"])
+    sign_in(tab, served.base, served.keys["auditor"])
     cookie = next(c for c in context.cookies() if c["name"] == "aacn_session")
     assert cookie["httpOnly"]
     assert cookie["secure"]
@@ -614,45 +399,3 @@ def test_logout_ends_the_session(chromium: Any, served: Served) -> None:
     page.wait_for_url(f"{served.base}/v1/session**")
     assert page.goto(served.url("minor")).status == 401
     context.close()
-
-
-def test_the_quality_page_for_the_auditor(served: Served, signed_in: Any) -> None:
-    """Outcomes linked over the API by the registry key, the auditor reads the quality page:
-    figures, the drift alarm, the reliability plot, the filters; no console errors."""
-    registry = {"Authorization": f"Bearer {served.keys['registry']}"}
-    for name, iss, mais in (("head-injury", 17, 3), ("minor", 4, 2)):
-        case = served.cases[name]
-        seat = case["result"]["occupants"][0]["seat"]
-        r = httpx.put(
-            f"{served.base}/v1/cases/{case['case_id']}/occupants/{seat}/outcome",
-            json={
-                "iss": iss,
-                "mais": mais,
-                "died": False,
-                "disposition": "admitted_ward",
-                "source": "trauma_registry",
-                "recorded_at": "2026-12-01T10:00:00Z",
-            },
-            headers=registry,
-            timeout=30,
-        )
-        assert r.status_code == 201, r.text
-    tab = _tab(signed_in)
-    page = tab.page
-    response = page.goto(f"{served.base}/v1/quality/report")
-    assert response.status == 200
-    assert page.locator("h1").inner_text() == "Triage quality against linked outcomes"
-    assert page.locator("#drift h2").inner_text() == "Drift alarm: insufficient"
-    assert "Too few linked outcomes" in page.locator("#drift").inner_text()
-    overall = page.locator("#overall").inner_text()
-    assert f"{len(served.cases)} cases" in overall
-    plot = page.locator("#overall svg.reliability")
-    assert plot.is_visible()
-    assert plot.locator("circle.point").count() == 2  # two linked occupants, two groups
-    _shot(page, "quality")
-    page.select_option("select[name=crash_mode]", "frontal")
-    page.click("#filters button[type=submit]")
-    page.wait_for_url("**/v1/quality/report?*crash_mode=frontal*")
-    assert page.locator("select[name=crash_mode]").input_value() == "frontal"
-    assert tab.problems == []
-    page.close()

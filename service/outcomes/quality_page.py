@@ -7,7 +7,9 @@ alarm and its next step, and the reliability plot (``reliability.py``). No queri
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
+from datetime import datetime
 from typing import Any
 
 from service.outcomes.quality import (
@@ -18,7 +20,7 @@ from service.outcomes.quality import (
     QualityReport,
     RateOut,
 )
-from service.pages.reliability import ReliabilityPlot, reliability_plot
+from service.outcomes.reliability import ReliabilityPlot, reliability_plot
 
 __all__ = ["QualityRow", "filters_from_query", "quality_context"]
 
@@ -112,8 +114,11 @@ def quality_context(report: QualityReport) -> dict[str, Any]:
     }
 
 
-def filters_from_query(query: dict[str, str], parse_time: Any) -> QualityFilters:
-    """The page's filters from its query (ValueError in the reader's words)."""
+def filters_from_query(
+    query: dict[str, str], parse_time: Callable[[str, str], datetime | None]
+) -> QualityFilters:
+    """The page's filters from its query (ValueError in the reader's words); ``parse_time``
+    reads a form's time given the field's name (``service.page_frame.form_time``)."""
     mode = query.get("crash_mode", "").strip()
     if mode and mode not in CRASH_MODES:
         raise ValueError(f"Unknown crash mode {mode!r}.")

@@ -1,5 +1,6 @@
 """The quality page's reliability plot: observed against predicted ISS 15+ by decile, as
-SVG geometry computed on the server (the case page's drawing style, ``drawing.py``).
+SVG geometry computed on the server (the case page's drawing style,
+``service/pages/drawing.py``; the template's macro is ``templates/_reliability.html``).
 
 Both axes share one linear scale from 0 to a round value above the largest decile
 mean and interval bound, so the diagonal (perfect calibration) is at 45 degrees.
@@ -11,7 +12,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Final
 
-from service.pages.drawing import nice_ticks
+from service.axis_ticks import nice_ticks
 
 __all__ = ["RELIABILITY_SIZE", "ReliabilityPlot", "Dot", "reliability_plot"]
 
