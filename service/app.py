@@ -22,7 +22,7 @@ from service.db import migrate
 from service.db.session import make_engine, make_sessionmaker
 from service.db.spool import Spool, SpoolReplayer
 from service.key_cache import KeyRefresher
-from service.metrics import Metrics, metrics_middleware
+from service.metrics import Metrics, MetricsMiddleware
 from service.middleware import BodySizeLimit, ResponseHeaders
 from service.nemsis import endpoints as nemsis
 from service.openapi import document_validation_problems, install_offline_docs, operation_id
@@ -153,7 +153,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     document_validation_problems(app)
     if settings.docs_enabled:
         install_offline_docs(app)
-    app.middleware("http")(metrics_middleware(metrics))
+    app.add_middleware(MetricsMiddleware, metrics=metrics)
     app.add_middleware(BodySizeLimit, max_bytes=settings.max_body_bytes)
     app.add_middleware(ResponseHeaders)
     if loads is not None:

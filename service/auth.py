@@ -220,7 +220,9 @@ def _check_role(caller: Caller, allowed: frozenset[Role]) -> Caller:
 def _require(*roles: Role) -> object:
     allowed = frozenset(roles) | {Role.ADMIN}
 
-    def dependency(caller: Annotated[Caller, Depends(authenticate)]) -> Caller:
+    async def dependency(caller: Annotated[Caller, Depends(authenticate)]) -> Caller:
+        # async: the role check does no I/O, so it runs on the event loop instead of
+        # taking a worker thread of its own (the key's read, `authenticate`, does)
         return _check_role(caller, allowed)
 
     return dependency

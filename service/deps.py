@@ -11,7 +11,8 @@ from service.context import ServiceContext
 __all__ = ["ContextDep"]
 
 
-def _context(request: Request) -> ServiceContext:
+async def _context(request: Request) -> ServiceContext:
+    # async: no I/O, so FastAPI calls it on the event loop instead of a worker thread
     ctx: ServiceContext = request.app.state.ctx
     return ctx
 

@@ -8,14 +8,12 @@ metrics endpoints are not counted.
 from __future__ import annotations
 
 import time
-from collections.abc import Awaitable, Callable
 
 from prometheus_client import CollectorRegistry, Counter, Histogram
-from starlette.requests import Request
-from starlette.responses import Response
 from starlette.routing import Match
+from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
-__all__ = ["Metrics", "metrics_middleware"]
+__all__ = ["Metrics", "MetricsMiddleware"]
 
 #: Paths left out of the HTTP metrics (polar's METRICS_DENY_LIST).
 UNCOUNTED_PATHS = frozenset({"/livez", "/readyz", "/metrics"})
@@ -70,36 +68,45 @@ class Metrics:
         )
 
 
-def _handler_name(request: Request) -> str:
-    matched = request.scope.get("route")  # set by Starlette's router once it has routed
+def _handler_name(scope: Scope) -> str:
+    matched = scope.get("route")  # set by Starlette's router once it has routed
     if matched is not None:
         return str(getattr(matched, "path", "none"))
-    for route in request.app.router.routes:
-        match, _ = route.matches(request.scope)
+    for route in scope["app"].router.routes:
+        match, _ = route.matches(scope)
         if match is Match.FULL:
             return str(getattr(route, "path", "none"))
     return "none"
 
 
-def metrics_middleware(
-    metrics: Metrics,
-) -> Callable[[Request, Callable[[Request], Awaitable[Response]]], Awaitable[Response]]:
-    """An HTTP middleware function recording counts and latencies."""
+class MetricsMiddleware:
+    """ASGI middleware recording each HTTP request's count and latency.
 
-    async def middleware(
-        request: Request, call_next: Callable[[Request], Awaitable[Response]]
-    ) -> Response:
-        if request.url.path in UNCOUNTED_PATHS:
-            return await call_next(request)
+    The status is the one the answer started with; a request whose app raised before
+    answering counts as 500 (the error middleware outside answers it so). Latency runs
+    from the request to the end of the answer's body.
+    """
+
+    def __init__(self, app: ASGIApp, metrics: Metrics) -> None:
+        self.app = app
+        self.metrics = metrics
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] != "http" or scope["path"] in UNCOUNTED_PATHS:
+            await self.app(scope, receive, send)
+            return
         start = time.perf_counter()
         status = 500
-        try:
-            response = await call_next(request)
-            status = response.status_code
-            return response
-        finally:
-            handler = _handler_name(request)
-            metrics.requests.labels(handler, request.method, f"{status // 100}xx").inc()
-            metrics.latency.labels(handler, request.method).observe(time.perf_counter() - start)
 
-    return middleware
+        async def send_status(message: Message) -> None:
+            nonlocal status
+            if message["type"] == "http.response.start":
+                status = message["status"]
+            await send(message)
+
+        try:
+            await self.app(scope, receive, send_status)
+        finally:
+            handler, method = _handler_name(scope), scope["method"]
+            self.metrics.requests.labels(handler, method, f"{status // 100}xx").inc()
+            self.metrics.latency.labels(handler, method).observe(time.perf_counter() - start)

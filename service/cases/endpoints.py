@@ -126,7 +126,7 @@ async def create_case(
     case_id = outcome.result.case_id
     status = 200 if outcome.replayed else 202 if outcome.spooled else 201
     return JSONResponse(
-        outcome.result.model_dump(mode="json"),
+        outcome.wire(),
         status_code=status,
         headers={
             "Location": f"/v1/cases/{case_id}",

@@ -32,7 +32,7 @@ from service.context import ServiceContext
 from service.db import repository
 from service.db.repository import CaseRecord
 from service.db.spool import SpoolEntry, SpoolError
-from service.db.tables import Case, CaseOccupant, IdempotencyRecord
+from service.db.tables import Case, IdempotencyRecord
 from service.problems import (
     EngineFailure,
     FieldError,
@@ -72,6 +72,13 @@ class SubmitOutcome:
     result: CaseResult
     replayed: bool
     spooled: bool = False
+    #: ``result.model_dump(mode="json")`` when it was built already (a newly stored
+    #: case: its stored payload and the two flags), else None.
+    document: dict[str, Any] | None = None
+
+    def wire(self) -> dict[str, Any]:
+        """The answer as a JSON document (``result`` in the wire's field order)."""
+        return self.document if self.document is not None else self.result.model_dump(mode="json")
 
 
 class InvalidCursor(UnprocessableNotification):
@@ -197,6 +204,16 @@ def _replay_spooled(entry: SpoolEntry, fingerprint: str, ctx: ServiceContext) ->
     return SubmitOutcome(result=result, replayed=True, spooled=True)
 
 
+@dataclass(frozen=True)
+class CaseRows:
+    """The rows of one case as column values: the case, its occupants, its idempotency
+    record (``repository.add_case`` inserts them in one transaction)."""
+
+    case: dict[str, Any]
+    occupants: list[dict[str, Any]]
+    record: dict[str, Any]
+
+
 def _case_rows(
     *,
     case_id: str,
@@ -209,56 +226,57 @@ def _case_rows(
     document: Any,
     payload: dict[str, Any],
     source: dict[str, Any] | None,
-) -> tuple[Case, IdempotencyRecord]:
+) -> CaseRows:
     """The rows of one case, from its result payload (stored directly or spooled).
 
     `source` is `ReceivedSource.record()` of a notification that came in as another
     format than JSON (the document as received and its mapping), else None.
     """
-    case = Case(
-        id=case_id,
-        event_id=event_id,
-        client_name=client_name,
-        received_at=received_at,
-        stored_at=stored_at,
-        spooled_at=spooled_at,
-        request_sha256=request_sha256,
-        notification=document,
-        result=payload,
-        models=payload["models"],
-        source_format=source["format"] if source else "json",
-        source_document=source["document"] if source else None,
-        source_mapping=source["mapping"] if source else None,
-        engine_version=payload["engine_version"],
-        iss15_plus=payload["triage"]["iss15_plus"],
-        probability=payload["triage"]["probability"],
+    case = {
+        "id": case_id,
+        "event_id": event_id,
+        "client_name": client_name,
+        "received_at": received_at,
+        "stored_at": stored_at,
+        "spooled_at": spooled_at,
+        "request_sha256": request_sha256,
+        "notification": document,
+        "result": payload,
+        "models": payload["models"],
+        "source_format": source["format"] if source else "json",
+        "source_document": source["document"] if source else None,
+        "source_mapping": source["mapping"] if source else None,
+        "engine_version": payload["engine_version"],
+        "iss15_plus": payload["triage"]["iss15_plus"],
+        "probability": payload["triage"]["probability"],
         # None for a result spooled before tiers (the list derives those)
-        tier=payload["triage"].get("tier"),
-        high_threshold=payload["triage"].get("high_threshold"),
-        occupants=[
-            CaseOccupant(
-                position=i,
-                seat=o["seat"],
-                impact_mode=o["impact_mode"],
-                method=o["method"],
-                iss15_plus=o["triage"]["iss15_plus"],
-                probability=o["triage"]["probability"],
-                tier=o["triage"].get("tier"),
-            )
-            for i, o in enumerate(payload["occupants"])
-        ],
-    )
-    record = IdempotencyRecord(
-        client_name=client_name,
-        event_id=event_id,
-        request_sha256=request_sha256,
-        case_id=case_id,
-        created_at=stored_at,
-    )
-    return case, record
+        "tier": payload["triage"].get("tier"),
+        "high_threshold": payload["triage"].get("high_threshold"),
+    }
+    occupants = [
+        {
+            "case_id": case_id,
+            "position": i,
+            "seat": o["seat"],
+            "impact_mode": o["impact_mode"],
+            "method": o["method"],
+            "iss15_plus": o["triage"]["iss15_plus"],
+            "probability": o["triage"]["probability"],
+            "tier": o["triage"].get("tier"),
+        }
+        for i, o in enumerate(payload["occupants"])
+    ]
+    record = {
+        "client_name": client_name,
+        "event_id": event_id,
+        "request_sha256": request_sha256,
+        "case_id": case_id,
+        "created_at": stored_at,
+    }
+    return CaseRows(case=case, occupants=occupants, record=record)
 
 
-def _add_case(ctx: ServiceContext, case: Case, record: IdempotencyRecord) -> IntegrityError | None:
+def _add_case(ctx: ServiceContext, rows: CaseRows) -> IntegrityError | None:
     """Store a case and its idempotency record in one transaction.
 
     Returns None when stored, or the ``IntegrityError`` of a case whose (client,
@@ -267,7 +285,7 @@ def _add_case(ctx: ServiceContext, case: Case, record: IdempotencyRecord) -> Int
     """
     try:
         with ctx.sessions.begin() as session:
-            repository.add_case(session, case, record)
+            repository.add_case(session, rows.case, rows.occupants, rows.record)
     except IntegrityError as exc:
         return exc
     return None
@@ -293,7 +311,7 @@ def store_spooled(ctx: ServiceContext, entry: SpoolEntry) -> None:
     sqlalchemy.exc.DBAPIError
         The store is still unavailable (the connection pool is reset).
     """
-    case, record = _case_rows(
+    rows = _case_rows(
         case_id=entry.case_id,
         event_id=entry.event_id,
         client_name=entry.client_name,
@@ -306,7 +324,7 @@ def store_spooled(ctx: ServiceContext, entry: SpoolEntry) -> None:
         source=entry.source,
     )
     try:
-        conflict = _add_case(ctx, case, record)
+        conflict = _add_case(ctx, rows)
     except STORE_ERRORS:
         ctx.reset_store_connections()
         raise
@@ -428,7 +446,7 @@ def submit(
     )
     if not store_up:
         return _spool(ctx, entry, fingerprint, result)
-    case, record = _case_rows(
+    rows = _case_rows(
         case_id=case_id,
         event_id=notification.event_id,
         client_name=caller.name,
@@ -441,7 +459,7 @@ def submit(
         source=entry.source,
     )
     try:
-        conflict = _add_case(ctx, case, record)
+        conflict = _add_case(ctx, rows)
     except STORE_ERRORS as exc:
         log.warning(
             "the store failed; the case goes to the spool",
@@ -456,7 +474,10 @@ def submit(
     methods = {o.method for o in result.occupants}
     method = Method.LPM if Method.LPM in methods else Method.FIELD
     ctx.metrics.decisions.labels(decision, method.value).inc()
-    return SubmitOutcome(result=result, replayed=False)
+    # the payload is the answer without its two last fields: the answer's document
+    # without a second dump
+    document = {**payload, "stored": result.stored, "spooled": result.spooled}
+    return SubmitOutcome(result=result, replayed=False, document=document)
 
 
 def stored_case(case: Case) -> StoredCase:

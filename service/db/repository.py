@@ -8,12 +8,26 @@ from dataclasses import dataclass
 from datetime import datetime
 from typing import Any
 
-from sqlalchemy import ColumnElement, and_, case, delete, exists, func, or_, select, text, update
+from sqlalchemy import (
+    ColumnElement,
+    Table,
+    and_,
+    case,
+    delete,
+    exists,
+    func,
+    insert,
+    or_,
+    select,
+    text,
+    update,
+)
 from sqlalchemy.orm import Session, selectinload
 
 from models.tiers import HIGH_RISK_THRESHOLD, Tier
 from service.db.tables import (
     ApiKey,
+    Base,
     Case,
     CaseOccupant,
     EndedSession,
@@ -117,11 +131,27 @@ def rotate_api_key(session: Session, key: ApiKey, *, key_prefix: str, key_sha256
 # --------------------------------------------------------------------- cases
 
 
-def add_case(session: Session, case: Case, record: IdempotencyRecord) -> None:
-    """Stage a case, its occupants and its idempotency record (one transaction)."""
-    session.add(case)
-    session.add(record)
-    session.flush()
+def _table(entity: type[Base]) -> Table:
+    return Base.metadata.tables[entity.__tablename__]
+
+
+def add_case(
+    session: Session,
+    case: Mapping[str, Any],
+    occupants: Sequence[Mapping[str, Any]],
+    record: Mapping[str, Any],
+) -> None:
+    """Insert a case, its occupants and its idempotency record (the caller commits).
+
+    Column values by name. Three INSERT statements on the session's connection (the
+    occupants as one executemany), in the order the foreign keys ask for, without the
+    ORM's unit of work: nothing is read back, so no object needs to be tracked. A
+    second case of the same (client, event_id) raises ``IntegrityError`` at the record.
+    """
+    session.execute(insert(_table(Case)), dict(case))
+    if occupants:
+        session.execute(insert(_table(CaseOccupant)), [dict(o) for o in occupants])
+    session.execute(insert(_table(IdempotencyRecord)), dict(record))
 
 
 def get_case(session: Session, case_id: str) -> Case | None:

@@ -3,8 +3,10 @@
 from __future__ import annotations
 
 import pytest
+from fastapi.responses import JSONResponse
 
 from service.cases.examples import EXAMPLE_NOTIFICATIONS
+from service.cases.result import CaseResult
 from tests.support import ApiClient, assert_problem, example, summary
 
 
@@ -75,6 +77,24 @@ def test_same_event_same_body_replays_without_storing(api_any_db: ApiClient) -> 
     assert again.json() == first.json()
     listing = api_any_db.client.get("/v1/cases", headers=api_any_db.headers("auditor")).json()
     assert [c["case_id"] for c in listing["items"]] == [first.json()["case_id"]]
+
+
+def test_a_new_case_is_answered_with_the_bytes_of_its_result_and_of_its_replay(
+    api: ApiClient,
+) -> None:
+    """The 201 answer is built from the stored payload (no second dump of the result):
+    byte for byte what the result model dumps, and what a replay of the stored case
+    answers."""
+    body = example("delta_v")
+    h = api.headers("submitter")
+    first = api.client.post("/v1/cases", json=body, headers=h)
+    assert first.status_code == 201
+    dumped = CaseResult.model_validate_json(first.content).model_dump(mode="json")
+    assert list(dumped)[-2:] == ["stored", "spooled"]
+    assert first.content == bytes(JSONResponse(dumped).body)
+    again = api.client.post("/v1/cases", json=body, headers=h)
+    assert again.status_code == 200
+    assert again.content == first.content
 
 
 def test_same_event_different_body_is_a_conflict(api_any_db: ApiClient) -> None:
