@@ -249,7 +249,7 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         },
         "triage_code": {
             "version": "0.2.0",
-            "sha256": "77c3db72e4ea60ffd450f77e8f57c4f7fe5a6f53d4cf18a97bb856c663a81497",
+            "sha256": "41976bd5011963ef3f0b81cf148c1c23960b2c590b87d34cae1118da291a5483",
         },
         "risk_calibration": {
             "version": "1",
