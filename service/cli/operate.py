@@ -211,7 +211,7 @@ def cmd_triage(args: argparse.Namespace) -> int:
 
     settings = load_settings()
     try:
-        models = models_for(settings)
+        models = models_for(settings, occupant_models=not args.decision_only)
     except ValueError as exc:
         echo(f"error: the models failed to load: {exc}", err=True)
         return 1

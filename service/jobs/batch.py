@@ -86,9 +86,8 @@ def _batch_line(
     settings: Settings, reproducible: bool, decision_only: bool, item: tuple[int, str]
 ) -> BatchLine:
     """A pool worker's task: one line, with this process's models for `settings`."""
-    return batch_record(
-        *item, models_for(settings), reproducible=reproducible, decision_only=decision_only
-    )
+    models = models_for(settings, occupant_models=not decision_only)
+    return batch_record(*item, models, reproducible=reproducible, decision_only=decision_only)
 
 
 def batch_record(
@@ -153,7 +152,7 @@ def run_batch(
     todo = list(enumerate(lines[done:], start=done + 1))
     workers = max(1, min(workers, len(todo)))
     task = functools.partial(_batch_line, settings, reproducible, decision_only)
-    models_for(settings)  # loaded here: forked workers inherit them
+    models_for(settings, occupant_models=not decision_only)  # forked workers inherit them
     with (
         out.open("a", encoding="utf-8") as sink,
         tqdm(total=len(lines), initial=done, unit="case", file=sys.stderr, desc="triage") as bar,
