@@ -249,7 +249,7 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         },
         "triage_code": {
             "version": "0.2.0",
-            "sha256": "41976bd5011963ef3f0b81cf148c1c23960b2c590b87d34cae1118da291a5483",
+            "sha256": "e9521feeeb94fc558fc4bc515d002eb79bbb18bf18216f891c60d4ff3b31faa3",
         },
         "risk_calibration": {
             "version": "1",
