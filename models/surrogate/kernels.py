@@ -268,7 +268,8 @@ def _select_in_place(a: FloatArray, lo: int, hi: int, k: int) -> None:
 _ORDER_SAMPLE_STEP = 16
 #: Half width of a window about the sample's rank, in standard deviations of that
 #: rank (binomial), plus two ranks. [R] At 4 a window misses its order statistic
-#: about once in 30,000 outputs, which then costs one full quickselect.
+#: about once in 10,000 windows or fewer (a rank beyond 4 standard deviations),
+#: which then costs one quickselect of the whole row.
 _ORDER_WINDOW_SD = 4.0
 
 
