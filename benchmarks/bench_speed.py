@@ -23,7 +23,8 @@ filled by the image's warm-up step):
 * **batch**: ``triage --batch`` of a real-shaped file, process start included,
   two workers: the vehicles of the shipped NASS-CDS 1997-2014 occupant extract
   (``models/offline/data``), a seeded sample of those whose delta-V, PDOF, seats
-  and belt use are coded, as summary notifications (the fields both trees read).
+  and belt use are coded, as summary notifications (the fields both trees read);
+  and the current tree's ``--decision-only`` batch (the field model alone), apart.
 
 The decision fields (``triage``, ``vehicle`` and every occupant's ``triage``) of
 the current tree's batch answers are compared byte for byte with those of the
@@ -234,9 +235,9 @@ def _serve(tree: Path, env: dict[str, str], requests: int) -> dict[str, float]:
     return {"ready_s": ready, "post_p50_ms": p50, "post_p99_ms": p99}
 
 
-def _batch(tree: Path, env: dict[str, str], src: Path, out: Path) -> float:
+def _batch(tree: Path, env: dict[str, str], src: Path, out: Path, *extra: str) -> float:
     cmd = [sys.executable, "-m", "service.cli", "triage", "--batch", str(src)]
-    cmd += ["--out", str(out), "--workers", "2"]
+    cmd += ["--out", str(out), "--workers", "2", *extra]
     t0 = time.perf_counter()
     subprocess.run(cmd, env=env, cwd=tree, check=True, capture_output=True)
     return time.perf_counter() - t0
@@ -284,6 +285,10 @@ def measure(tree: Path, work: Path, src: Path, requests: int) -> dict[str, Any]:
     out = work / f"{name}.out.jsonl"
     figures["batch_s"] = _batch(tree, env, src, out)
     figures["batch_out"] = out
+    if tree == ROOT:  # the decision-only mode (the baseline has none)
+        fast = work / f"{name}.decision-only.jsonl"
+        figures["batch_decision_only_s"] = _batch(tree, env, src, fast, "--decision-only")
+        figures["batch_decision_only_out"] = fast
     return figures
 
 
@@ -336,6 +341,12 @@ def _report(args: argparse.Namespace, base: dict[str, Any], cur: dict[str, Any],
         lines.append(f"| {label} | {b:.2f} | {c:.2f} | {c / b:.2f} | {target} |")
     vb, vc = n / base["batch_s"], n / cur["batch_s"]
     lines.append(f"| batch (vehicles/s) | {vb:.0f} | {vc:.0f} | {vc / vb:.2f} | >= 3 |")
+    if "batch_decision_only_s" in cur:
+        vd = n / cur["batch_decision_only_s"]
+        lines.append(
+            f"| batch `--decision-only` (vehicles/s; against {args.baseline}'s full batch) "
+            f"| {vb:.0f} | {vd:.0f} | {vd / vb:.2f} | measured apart |"
+        )
     lines += ["", same, ""]
     for label, figures in ((args.baseline, base), ("current", cur)):
         lines += [
@@ -374,6 +385,11 @@ def main() -> None:
         a, b = decision_bytes(cur["batch_out"]), decision_bytes(ref_out)
         differ = sum(x != y for x, y in zip(a, b, strict=True))
         same = f"Decision fields of the {len(a)} batch answers against `{args.reference}`'s: " + (
+            "the same bytes." if differ == 0 else f"{differ} differ."
+        )
+        d = decision_bytes(cur["batch_decision_only_out"])
+        differ = sum(x != y for x, y in zip(d, a, strict=True))
+        same += " The `--decision-only` batch's against the full batch's: " + (
             "the same bytes." if differ == 0 else f"{differ} differ."
         )
         text = _report(args, base, cur, same)

@@ -43,6 +43,7 @@ class AssumptionCode(StrEnum):
     CHILD_WITHOUT_OCCUPANT_MODEL = "child_without_occupant_model"
     CHILD_REGION_RISK_EXTRAPOLATED = "child_region_risk_extrapolated"
     OUTSIDE_OCCUPANT_MODEL_COVERAGE = "outside_occupant_model_coverage"
+    OCCUPANT_MODELS_NOT_RUN = "occupant_models_not_run"
     OCCUPANT_MODEL_FAILED = "occupant_model_failed"
     POSTURE_NOT_SENSED = "posture_not_sensed"
     SEAT_POSITION_NOT_SENSED = "seat_position_not_sensed"
@@ -166,6 +167,11 @@ DESCRIPTIONS: Final[dict[AssumptionCode, str]] = {
     AssumptionCode.OUTSIDE_OCCUPANT_MODEL_COVERAGE: (
         "The PDOF lies between the occupant models' ranges: the field model decides without "
         "an occupant-model explanation."
+    ),
+    AssumptionCode.OCCUPANT_MODELS_NOT_RUN: (
+        "A decision-only run (a fleet's rescoring): the occupant models were not run, so no "
+        "occupant-model explanation is given; the field risk model's decision is the one a "
+        "full run gives."
     ),
     AssumptionCode.OCCUPANT_MODEL_FAILED: (
         "The occupant model failed for this occupant: the field model decides without its "

@@ -49,12 +49,14 @@ def limit_blas_threads(threads: int) -> None:
     threadpool_limits(limits=threads, user_api="blas")
 
 
-def engine_models_for(settings: Settings) -> EngineModels:
+def engine_models_for(settings: Settings, *, occupant_models: bool = True) -> EngineModels:
     """Load the engine models as the settings configure them (raises ValueError).
 
     A field model version withdrawn for a defect is refused unless
     `settings.allow_withdrawn_field_model`. Also caps this process's BLAS threads
-    at `settings.blas_threads`.
+    at `settings.blas_threads`. Without `occupant_models` the surrogates are not
+    loaded (a decision-only batch never runs them; they are most of the loading
+    time).
     """
     limit_blas_threads(settings.blas_threads)
     models = load_engine_models(
@@ -65,6 +67,7 @@ def engine_models_for(settings: Settings) -> EngineModels:
         posture_sd_deg=settings.posture_sd_deg,
         seat_track_sd_mm=settings.seat_track_sd_mm,
         surrogate_dir=settings.surrogate_dir,
+        use_surrogates=occupant_models,
         blas_threads=settings.blas_threads,
     )
     field = models.field

@@ -50,6 +50,8 @@ TREE_DEPTH: Final[int] = 3
 #: Internal nodes and leaves of one complete tree of :data:`TREE_DEPTH`.
 N_SPLITS: Final[int] = 2**TREE_DEPTH - 1
 N_LEAVES: Final[int] = 2**TREE_DEPTH
+if TREE_DEPTH != 3:  # pragma: no cover - _forest_scores writes out a depth-3 walk
+    raise ImportError("models.field.boosted: _forest_scores walks trees of depth 3")
 #: Threshold of a padding split: every finite value goes left (``x <= t``).
 ALWAYS_LEFT: Final[float] = float(np.finfo(np.float64).max)
 
@@ -251,17 +253,28 @@ class Forest:
 
         One compiled loop (:func:`_forest_scores`): each tree walked
         ``TREE_DEPTH`` levels in heap order, its leaf added to its member's
-        baseline in tree order (scikit-learn's order of summation).
+        baseline in tree order (scikit-learn's order of summation). Rows that
+        repeat (the same bytes) are walked once: a row's scores depend on that
+        row alone, so they are copied, not recomputed (the integration over
+        unknown inputs repeats about a quarter of its rows).
         """
         x = np.ascontiguousarray(x_all, dtype=np.float64)
-        return _forest_scores(
-            x,
+        inverse = None
+        if x.shape[0] >= _DEDUPLICATE_FROM_ROWS:
+            unique, inverse = np.unique(x.view(np.void(8 * x.shape[1])), return_inverse=True)
+            if unique.shape[0] < x.shape[0]:
+                x = np.ascontiguousarray(unique.view(np.float64).reshape(-1, x.shape[1]))
+            else:
+                inverse = None
+        scores = _forest_scores(
+            np.ascontiguousarray(x.T),
             self.features,
             self.thresholds,
             self.leaf_values,
             self._member_of_tree,
             self.baselines,
         )
+        return scores if inverse is None else np.ascontiguousarray(scores[inverse.ravel()])
 
     def split(self, scores: FloatArray) -> list[FloatArray]:
         """`scores` (n, M) cut into each bag's (n, B_i)."""
@@ -269,35 +282,54 @@ class Forest:
         return list(np.split(scores, edges, axis=1))
 
 
+#: Rows from which :meth:`Forest.member_scores` looks for repeated rows first. [R]
+#: Below it the search costs about what it saves (one occupant's few rows).
+_DEDUPLICATE_FROM_ROWS: Final[int] = 16
+
+
 @njit(cache=True, nogil=True)
 def _forest_scores(
-    x: FloatArray,
+    xt: FloatArray,
     features: IntArray,
     thresholds: FloatArray,
     leaf_values: FloatArray,
     member_of_tree: IntArray,
     baselines: FloatArray,
 ) -> FloatArray:  # pragma: no cover - compiled (tested through Forest.member_scores)
-    """Members' raw scores (n, M) of design rows `x` (n, K); see :class:`Forest`.
+    """Members' raw scores (n, M) of design rows given as columns, `xt` (K, n); see :class:`Forest`.
 
-    Why compiled: the trees of a model (about 11,000 for five boosted outcomes)
+    Why compiled: the trees of a model (about 20,000 for five boosted outcomes)
     walked in numpy cost 0.8 ms per occupant and 1,600 occupants/s in a batch
-    (measured); a loop touches only the three nodes on each tree's path.
+    (measured); a loop touches only the three nodes on each tree's path. The
+    walk of a depth-3 tree is written out (node 0, then 1 or 2, then 3 to 6,
+    leaf 0 to 7: heap order), with a tree's seven features and thresholds read
+    once and each design column contiguous over the rows: [R] 2.6 times faster
+    than the loop over levels on the rows of 60 NASS-CDS vehicles (133 -> 46 ms,
+    numba's generic target, measured 2026-12-08). The same leaves, added in the
+    same order: the same bits.
     """
-    n = x.shape[0]
+    n = xt.shape[1]
     acc = np.empty((baselines.shape[0], n))  # members x rows: one tree's adds are contiguous
     for m in range(baselines.shape[0]):
         acc[m, :] = baselines[m]
     for t in range(features.shape[0]):  # trees outside: each tree's nodes read once
         m = member_of_tree[t]
-        for i in range(n):
-            node = 0
-            for _ in range(TREE_DEPTH):
-                if x[i, features[t, node]] > thresholds[t, node]:
-                    node = 2 * node + 2
+        f0, f1, f2 = features[t, 0], features[t, 1], features[t, 2]
+        f3, f4, f5, f6 = features[t, 3], features[t, 4], features[t, 5], features[t, 6]
+        t0, t1, t2 = thresholds[t, 0], thresholds[t, 1], thresholds[t, 2]
+        t3, t4, t5, t6 = thresholds[t, 3], thresholds[t, 4], thresholds[t, 5], thresholds[t, 6]
+        base = t * N_LEAVES
+        for i in range(n):  # right when x > threshold (left when x <= t, or NaN)
+            if xt[f0, i] > t0:
+                if xt[f2, i] > t2:
+                    leaf = 6 + (xt[f6, i] > t6)
                 else:
-                    node = 2 * node + 1
-            acc[m, i] += leaf_values[t * N_LEAVES + node - N_SPLITS]
+                    leaf = 4 + (xt[f5, i] > t5)
+            elif xt[f1, i] > t1:
+                leaf = 2 + (xt[f4, i] > t4)
+            else:
+                leaf = 0 + (xt[f3, i] > t3)
+            acc[m, i] += leaf_values[base + leaf]
     return np.ascontiguousarray(acc.T)
 
 

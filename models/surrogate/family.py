@@ -35,7 +35,7 @@ from models.surrogate.family_constants import (
     _bootstrap_sd,
     _sd_floor,
 )
-from models.surrogate.kernels import gather_p_sets
+from models.surrogate.kernels import gather_p_sets, pooled_order_statistics
 from models.surrogate.pieces import _KrigedPiece, _Piece, _piece, _smoothstep, _SplitPiece
 from models.surrogate.spec import (
     INPUT_NAMES,
@@ -625,25 +625,16 @@ class SurrogateFamily:
         move gets +-m, one they move a lot little more.
         """
         n_out = int(raw.shape[0])
-        # each output's (replicates x samples) values as one row, copied in the order
-        # `raw` holds them in memory (the samples' axis is the outer one when `raw` is
-        # a product's transpose): an order statistic does not depend on the order
-        block = raw[:, 1:, 1:]
-        if raw.strides[1] < raw.strides[2]:
-            block = block.transpose(0, 2, 1)
-        pooled = np.array(block).reshape(n_out, -1)
-        n = pooled.shape[1]
+        n = (int(raw.shape[1]) - 1) * (int(raw.shape[2]) - 1)
         k_lo = max(math.ceil(_PCT[0] / 100.0 * n) - 1, 0)
         k_hi = max(math.ceil(_PCT[1] / 100.0 * n) - 1, 0)
-        # one order statistic per call: numpy selects a single kth with its SIMD
-        # quickselect, several kth with introselect. [R] 0.2 against 1.0 ms on 6 x 14,400
-        # (measured 2026-12-04); the same values either way (exact order statistics)
-        # in place on `pooled` (a copy of its own: the reshape of a strided view): the
-        # second selection reorders the same values, so it finds the same statistic
-        pooled.partition(k_lo, axis=1)
-        q_los = pooled[:, k_lo].copy()
-        pooled.partition(k_hi, axis=1)
-        q_his = pooled[:, k_hi].copy()
+        # exact order statistics of each output's pooled (replicates x samples)
+        # values, read in place (models.surrogate.kernels)
+        q_los, q_his, finite = pooled_order_statistics(raw, k_lo, k_hi)
+        if not finite:  # numpy's order (NaN last) for a pool that holds a NaN
+            pooled = np.array(raw[:, 1:, 1:]).reshape(n_out, -1)
+            q_los = np.partition(pooled, k_lo, axis=1)[:, k_lo]
+            q_his = np.partition(pooled, k_hi, axis=1)[:, k_hi]
         # the replicates' spread at the reading, every output in one call (the same
         # bits as one call per output: pairwise sums over the same 150 values)
         sds = np.std(raw[:, 1:, 0], axis=1, ddof=1)

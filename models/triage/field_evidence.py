@@ -114,6 +114,7 @@ def _occupant_evidence(
     pulse: ProcessedPulse,
     models: EngineModels,
     assumptions: list[Assumption],
+    occupant_models: bool = True,
 ) -> OccupantEvidence:
     impact = classify_impact(pulse.pdof_deg, occupant.seat, notification.drive_side)
     answer: _LpmAnswer | None = None
@@ -133,6 +134,15 @@ def _occupant_evidence(
                 AssumptionCode.CHILD_WITHOUT_OCCUPANT_MODEL,
                 f"occupants[{index}]: a child (age under 16 or in a child seat): the occupant "
                 "models are adult dummies and give no explanation; the field risk model decides",
+                index,
+            )
+        )
+    elif impact.in_lpm_coverage and not occupant_models:
+        assumptions.append(
+            Assumption(
+                AssumptionCode.OCCUPANT_MODELS_NOT_RUN,
+                f"occupants[{index}]: decision only: the occupant models were not run (no "
+                "explanation); the field risk model decides as in a full run",
                 index,
             )
         )

@@ -100,7 +100,9 @@ def _vehicle_answer(
     )
 
 
-def triage(notification: CrashNotification, models: EngineModels) -> TriageResult:
+def triage(
+    notification: CrashNotification, models: EngineModels, *, occupant_models: bool = True
+) -> TriageResult:
     """Triage every occupant of a notification.
 
     Parameters
@@ -108,6 +110,11 @@ def triage(notification: CrashNotification, models: EngineModels) -> TriageResul
     notification : CrashNotification
     models : EngineModels
         With a field model.
+    occupant_models : bool, optional
+        False: the decision only (a fleet's rescoring): the occupant models
+        (LPM and surrogates) are not run, so no occupant has an explanation
+        (an assumption says so); every decision field is the full run's, bit
+        for bit (the field risk model never reads the occupant models).
 
     Returns
     -------
@@ -163,7 +170,7 @@ def triage(notification: CrashNotification, models: EngineModels) -> TriageResul
     risk_predictions: list[RiskPrediction] = []
     field_ms = 0.0
     evidences = [
-        _occupant_evidence(i, occupant, notification, pulse, models, assumptions)
+        _occupant_evidence(i, occupant, notification, pulse, models, assumptions, occupant_models)
         for i, occupant in enumerate(notification.occupants)
     ]
     if isinstance(field_model, RiskModel):  # every occupant at once: one walk of the trees

@@ -249,7 +249,7 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         },
         "triage_code": {
             "version": "0.2.0",
-            "sha256": "77c3db72e4ea60ffd450f77e8f57c4f7fe5a6f53d4cf18a97bb856c663a81497",
+            "sha256": "e9521feeeb94fc558fc4bc515d002eb79bbb18bf18216f891c60d4ff3b31faa3",
         },
         "risk_calibration": {
             "version": "1",

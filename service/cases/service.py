@@ -132,11 +132,13 @@ def evaluate(
     case_id: str | None,
     received_at: datetime,
     extra_assumptions: Sequence[Assumption] = (),
+    occupant_models: bool = True,
 ) -> CaseResult:
     """Run the engine on a validated notification (no database).
 
     `extra_assumptions` (what mapping a VEDS document assumed) come first in the
-    answer's assumptions, before the engine's own.
+    answer's assumptions, before the engine's own. Without `occupant_models` the
+    answer is the decision only (``models.triage.triage``'s decision-only run).
 
     Raises
     ------
@@ -149,7 +151,7 @@ def evaluate(
     """
     engine_input, notes = notification.to_engine()
     try:
-        result = triage(engine_input, models)
+        result = triage(engine_input, models, occupant_models=occupant_models)
     except UnknownVehicleModel as exc:
         raise UnprocessableNotification(
             str(exc),

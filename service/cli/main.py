@@ -8,7 +8,7 @@ Commands::
     aacn-triage keys list | keys revoke NAME|ID | keys rotate NAME|ID
     aacn-triage triage FILE.json
     aacn-triage triage --batch IN.jsonl|IN.parquet --out OUT.jsonl [--resume]
-                       [--workers N | --scheduler tcp://HOST:8786]
+                       [--workers N | --scheduler tcp://HOST:8786] [--decision-only]
     aacn-triage simulate FILE.json [--plot OUT.png]
     aacn-triage build-surrogates [--family NAME] [--workers N] ...
     aacn-triage validate-surrogates [--n N] [--seed S] [--family NAME] ...
@@ -106,6 +106,12 @@ def build_parser() -> argparse.ArgumentParser:
         action="store_true",
         help="answers hold nothing of the run: received_at is the crash's occurred_at and "
         "timings_ms is empty, so the same input gives the same bytes (pool or Dask)",
+    )
+    tri.add_argument(
+        "--decision-only",
+        action="store_true",
+        help="the field risk model's decision only, for rescoring a fleet: the occupant "
+        "models are not run (no explanation); the decision fields are a full run's",
     )
     tri.set_defaults(func=cmd_triage)
 

@@ -211,7 +211,7 @@ def cmd_triage(args: argparse.Namespace) -> int:
 
     settings = load_settings()
     try:
-        models = models_for(settings)
+        models = models_for(settings, occupant_models=not args.decision_only)
     except ValueError as exc:
         echo(f"error: the models failed to load: {exc}", err=True)
         return 1
@@ -220,7 +220,9 @@ def cmd_triage(args: argparse.Namespace) -> int:
             echo("error: give FILE.json or --batch IN.jsonl --out OUT.jsonl", err=True)
             return 2
         text = Path(args.file).read_text(encoding="utf-8")
-        outcome = evaluate_text(text, models, reproducible=args.reproducible)
+        outcome = evaluate_text(
+            text, models, reproducible=args.reproducible, decision_only=args.decision_only
+        )
         if outcome.problem is not None:
             echo(json.dumps(outcome.problem, indent=2), err=True)
             return 1
@@ -237,6 +239,7 @@ def cmd_triage(args: argparse.Namespace) -> int:
         resume=args.resume,
         workers=workers,
         reproducible=args.reproducible,
+        decision_only=args.decision_only,
     )
 
 
@@ -253,7 +256,9 @@ def _run_batch_on_dask(args: argparse.Namespace) -> int:
             Path(args.out),
             scheduler=args.scheduler,
             settings=load_settings(),
-            record=functools.partial(batch_record, reproducible=args.reproducible),
+            record=functools.partial(
+                batch_record, reproducible=args.reproducible, decision_only=args.decision_only
+            ),
             resume=args.resume,
         )
     except (RuntimeError, ValueError, OSError) as exc:

@@ -37,8 +37,14 @@ class Evaluation:
         return {"result": self.result} if self.problem is None else {"error": self.problem}
 
 
-def evaluate_text(text: str, models: EngineModels, *, reproducible: bool = False) -> Evaluation:
-    """One notification (JSON text) -> its result, or the problem that refused it."""
+def evaluate_text(
+    text: str, models: EngineModels, *, reproducible: bool = False, decision_only: bool = False
+) -> Evaluation:
+    """One notification (JSON text) -> its result, or the problem that refused it.
+
+    With `decision_only` the occupant models are not run: the answer's decision
+    fields are a full run's, without the occupant models' explanation.
+    """
     from service.cases.notification import CrashNotificationIn
     from service.cases.service import evaluate
     from service.jsonbody import MalformedJson
@@ -57,7 +63,13 @@ def evaluate_text(text: str, models: EngineModels, *, reproducible: bool = False
         return Evaluation(problem=problem_from_validation(exc))
     try:
         received_at = notification.occurred_at if reproducible else datetime.now(UTC)
-        result = evaluate(notification, models, case_id=None, received_at=received_at)
+        result = evaluate(
+            notification,
+            models,
+            case_id=None,
+            received_at=received_at,
+            occupant_models=not decision_only,
+        )
     except DomainError as exc:
         return Evaluation(problem=problem_from_domain_error(exc))
     if reproducible:  # nothing of the run itself: the same input gives the same bytes
@@ -70,27 +82,38 @@ def evaluate_text(text: str, models: EngineModels, *, reproducible: bool = False
 BATCH_CHUNK = 8
 
 
-def _batch_line(settings: Settings, reproducible: bool, item: tuple[int, str]) -> BatchLine:
+def _batch_line(
+    settings: Settings, reproducible: bool, decision_only: bool, item: tuple[int, str]
+) -> BatchLine:
     """A pool worker's task: one line, with this process's models for `settings`."""
-    return batch_record(*item, models_for(settings), reproducible=reproducible)
+    models = models_for(settings, occupant_models=not decision_only)
+    return batch_record(*item, models, reproducible=reproducible, decision_only=decision_only)
 
 
 def batch_record(
-    number: int, text: str, models: EngineModels, *, reproducible: bool = False
+    number: int,
+    text: str,
+    models: EngineModels,
+    *,
+    reproducible: bool = False,
+    decision_only: bool = False,
 ) -> BatchLine:
     """One output line of a batch: the answer to input line `number`, or its error.
 
     With `reproducible`, ``received_at`` is the crash's time and there are no
     timings: an answer then holds nothing of the run that made it, so the same
     input and model versions give the same bytes on any machine, pool or cluster
-    (a recall or a study can be re-run and compared with ``cmp``).
+    (a recall or a study can be re-run and compared with ``cmp``). With
+    `decision_only`, the occupant models are not run (:func:`evaluate_text`).
     """
     from service.problems import empty_line_problem
 
     if not text.strip():
         evaluation = Evaluation(problem=empty_line_problem())
     else:
-        evaluation = evaluate_text(text, models, reproducible=reproducible)
+        evaluation = evaluate_text(
+            text, models, reproducible=reproducible, decision_only=decision_only
+        )
     record = {"line": number, **evaluation.fields()}
     return BatchLine(json.dumps(record, separators=(",", ":")), evaluation.problem is not None)
 
@@ -103,6 +126,7 @@ def run_batch(
     resume: bool,
     workers: int = 1,
     reproducible: bool = False,
+    decision_only: bool = False,
 ) -> int:
     """Evaluate a JSONL file into OUT (one line per input line, in order).
 
@@ -111,7 +135,9 @@ def run_batch(
     one with its loaded models where the platform forks; else spawned, each loading
     them once from the shared numba cache) and written back in input order. With
     `resume`, the complete lines already in OUT are kept and skipped, so an
-    interrupted run continues where it stopped; without it OUT is rewritten.
+    interrupted run continues where it stopped; without it OUT is rewritten. With
+    `decision_only` the occupant models are not run (a fleet's rescoring: the
+    decision fields of a full run, without the explanation).
     """
     import multiprocessing
     from concurrent.futures import ProcessPoolExecutor
@@ -125,8 +151,8 @@ def run_batch(
     failures = 0
     todo = list(enumerate(lines[done:], start=done + 1))
     workers = max(1, min(workers, len(todo)))
-    task = functools.partial(_batch_line, settings, reproducible)
-    models_for(settings)  # loaded here: forked workers inherit them
+    task = functools.partial(_batch_line, settings, reproducible, decision_only)
+    models_for(settings, occupant_models=not decision_only)  # forked workers inherit them
     with (
         out.open("a", encoding="utf-8") as sink,
         tqdm(total=len(lines), initial=done, unit="case", file=sys.stderr, desc="triage") as bar,

@@ -37,8 +37,9 @@ class BatchLine:
     refused: bool
 
 
-#: The engine models of this process, by the settings they were loaded for.
-_MODELS: dict[str, EngineModels] = {}
+#: The engine models of this process, by the settings they were loaded for (and
+#: whether with the occupant models' surrogates).
+_MODELS: dict[tuple[str, bool], EngineModels] = {}
 _MODELS_LOCK = threading.Lock()
 
 
@@ -46,12 +47,17 @@ def _key(settings: Settings) -> str:
     return settings.model_dump_json()
 
 
-def models_for(settings: Settings) -> EngineModels:
-    """The engine models for `settings`, loaded on the first call in this process."""
+def models_for(settings: Settings, *, occupant_models: bool = True) -> EngineModels:
+    """The engine models for `settings`, loaded on the first call in this process.
+
+    Without `occupant_models`: the models of a decision-only batch, loaded without
+    the surrogates (``service.context.engine_models_for``); the occupant models must
+    then not be run with them (``models.triage.triage(occupant_models=False)``).
+    """
     from service.context import engine_models_for
 
-    key = _key(settings)
+    key = (_key(settings), occupant_models)
     with _MODELS_LOCK:
         if key not in _MODELS:
-            _MODELS[key] = engine_models_for(settings)
+            _MODELS[key] = engine_models_for(settings, occupant_models=occupant_models)
         return _MODELS[key]

@@ -85,3 +85,15 @@ def test_a_bag_refit_is_bit_identical_and_ranks_the_signal() -> None:
     assert a.probability(probe)[-1] > a.probability(probe)[0] + 0.2
     # out-of-bag recalibration: the mean prediction matches the observed rate
     assert a.probability(x).mean() == pytest.approx(y.mean(), rel=0.15)
+
+
+def test_repeated_rows_score_as_each_row_alone() -> None:
+    """Rows walked once per distinct row give each row the bits of its own walk."""
+    x, y, crash = _data(1500, 5)
+    bag = fit_bag(x, y, np.ones_like(y), crash, [1, 2, 3, 4], 30, 3, 5).bag
+    rng = np.random.default_rng(6)
+    rows = x[rng.integers(0, 12, size=64)]  # 64 rows, at most 12 distinct
+    rows[7, 3] = np.nan  # a distinct row (NaN goes left at every split)
+    got = bag.member_scores(rows)
+    alone = np.concatenate([bag.member_scores(r[None, :]) for r in rows])
+    assert np.array_equal(got, alone, equal_nan=True)

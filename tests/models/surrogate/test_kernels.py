@@ -14,6 +14,7 @@ from models.surrogate.kernels import (
     gather_p_sets,
     grouped_coefficients,
     matern32_in_place,
+    pooled_order_statistics,
     warm_up,
 )
 
@@ -127,3 +128,46 @@ def test_add_correction_is_the_broadcast_add(transposed: bool) -> None:
     expected = out + corr.T[:, None, :]
     add_correction(out, corr)
     assert np.array_equal(out, expected)
+
+
+def _partition_statistics(raw: np.ndarray, k_lo: int, k_hi: int) -> tuple[np.ndarray, ...]:
+    pooled = np.array(raw[:, 1:, 1:]).reshape(raw.shape[0], -1)
+    return (
+        np.partition(pooled, k_lo, axis=1)[:, k_lo],
+        np.partition(pooled, k_hi, axis=1)[:, k_hi],
+    )
+
+
+def test_pooled_order_statistics_are_numpy_partition() -> None:
+    """Any shape, either memory layout, ties, constant and sorted pools, extreme ranks."""
+    rng = np.random.default_rng(21)
+    for trial in range(300):
+        shape = (int(rng.integers(1, 7)), int(rng.integers(2, 160)), int(rng.integers(2, 100)))
+        raw = rng.normal(size=shape) * 10.0 ** rng.uniform(-3, 3)
+        if trial % 4 == 1:
+            raw = np.round(raw, 1)  # ties
+        if trial % 4 == 2:  # the samples' axis outermost (a product's transpose)
+            raw = np.ascontiguousarray(raw.transpose(2, 0, 1)).transpose(1, 2, 0)
+        if trial % 7 == 3:
+            raw[:] = 2.0
+        if trial % 5 == 4:
+            raw = np.sort(raw, axis=2)
+        n = (shape[1] - 1) * (shape[2] - 1)
+        interval = (max(math.ceil(0.025 * n) - 1, 0), max(math.ceil(0.975 * n) - 1, 0))
+        some = tuple(int(k) for k in sorted(rng.integers(0, n, 2)))
+        for k_lo, k_hi in (interval, (0, n - 1), some):
+            lo, hi, finite = pooled_order_statistics(raw, k_lo, k_hi)
+            ref_lo, ref_hi = _partition_statistics(raw, k_lo, k_hi)
+            assert finite
+            assert np.array_equal(lo, ref_lo), (trial, shape, k_lo)
+            assert np.array_equal(hi, ref_hi), (trial, shape, k_hi)
+
+
+def test_pooled_order_statistics_refuse_a_nan() -> None:
+    raw = np.random.default_rng(22).normal(size=(3, 20, 30))
+    raw[1, 4, 5] = np.nan
+    assert not pooled_order_statistics(raw, 10, 500)[2]
+    raw[1, 4, 5] = 0.0
+    raw[:, 0, :] = np.nan  # the point PCE and the reading are not in the pool
+    raw[:, :, 0] = np.nan
+    assert pooled_order_statistics(raw, 10, 500)[2]

@@ -35,3 +35,12 @@ def test_a_process_loads_the_models_once_per_settings() -> None:
     settings = get_settings()
     first = models_for(settings)
     assert models_for(settings.model_copy()) is first, "the same settings: the same models"
+    assert first.surrogates is not None
+
+
+def test_a_decision_only_process_loads_no_surrogates() -> None:
+    settings = get_settings()
+    decision_only = models_for(settings, occupant_models=False)
+    assert decision_only.surrogates is None, "a decision-only batch never runs them"
+    assert models_for(settings, occupant_models=False) is decision_only
+    assert models_for(settings) is not decision_only
