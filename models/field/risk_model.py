@@ -45,6 +45,7 @@ from models.arrays import FloatArray, IntArray
 from models.codehash import source_tree_sha256
 from models.constants import Z_95
 from models.field.boosted import Forest, TreeBag
+from models.field.children_calibration import ChildrenCalibration
 from models.field.measurement import (
     MEASUREMENT_MODELS,
     DeltaVSource,
@@ -526,6 +527,11 @@ class RiskModel:
         ``logit P = a + b logit P_decided`` (:mod:`models.field.recalibration`),
         applied to the decided probability, its interval and refits, and the
         spread over unknown inputs; None: the national model as fitted.
+    children : ChildrenCalibration or None
+        The children's own calibration of the decision (by age group and child
+        seat, :mod:`models.field.children_calibration`; 3.4.0 on), applied to
+        every child row before the integration over unknown inputs; None: the
+        shared calibration for everyone (older artifacts).
     """
 
     name: str
@@ -548,6 +554,7 @@ class RiskModel:
     knowledge_thresholds: Mapping[str, Mapping[str, float]] = field(default_factory=dict)
     measurement: MeasurementModel | None = None
     recalibration: tuple[float, float] | None = None
+    children: ChildrenCalibration | None = None
 
     @classmethod
     def from_artifact(cls, path: str | Path) -> RiskModel:
@@ -697,6 +704,14 @@ class RiskModel:
             recal = (float(_get(rc, "intercept")), float(_get(rc, "slope")))
             if not all(np.isfinite(recal)) or recal[1] <= 0.0:
                 raise ArtifactError("`recalibration` must be finite with a positive slope")
+        children = None
+        if "children_calibration" in doc:
+            try:
+                children = ChildrenCalibration.from_document(
+                    _get(doc, "children_calibration"), cand, decision.n_bootstrap
+                )
+            except ValueError as exc:
+                raise ArtifactError(str(exc)) from None
         return cls(
             name=str(_get(model, "name")),
             version=str(_get(model, "version")),
@@ -720,6 +735,7 @@ class RiskModel:
             knowledge_thresholds=by_knowledge,
             measurement=measurement,
             recalibration=recal,
+            children=children,
         )
 
     def design(
@@ -916,11 +932,14 @@ class RiskModel:
         out = []
         for m in models:
             if isinstance(m, BoostedOutcomeModel):
-                out.append(m.logits_of_scores(scores[m.name]))
+                logits = m.logits_of_scores(scores[m.name])
             elif isinstance(m, BlendOutcomeModel):
-                out.append(m.logits_of_scores(x, scores[m.name]))
+                logits = m.logits_of_scores(x, scores[m.name])
             else:
-                out.append(m.logits(x))
+                logits = m.logits(x)
+            if m is self.decision and self.children is not None:
+                logits = self.children.apply(*logits, x)
+            out.append(logits)
         return out
 
     def decision_probability(self, x_all: FloatArray) -> FloatArray:

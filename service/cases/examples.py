@@ -29,27 +29,27 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
     "received_at": "2026-11-23T08:15:31Z",
     "triage": {
         "iss15_plus": True,
-        "probability": 0.03974,
-        "probability_ci95": [0.03381, 0.04666],
+        "probability": 0.03996,
+        "probability_ci95": [0.03399, 0.04693],
         "threshold": 0.01798,
         "recommendation": "Vehicle telemetry consistent with severe injury (2021 "
         "guideline, moderate risk): consider a trauma center, which need "
         "not be the highest level; EMS judgment and local protocol "
         "decide.",
         "outcome": "ISS15+",
-        "model": "field_iss15@3.3.1",
+        "model": "field_iss15@3.4.0",
         "operating_point": "sens85",
-        "unknown_inputs_range95": [0.02153, 0.04764],
+        "unknown_inputs_range95": [0.02176, 0.04797],
         "knowledge": "adult_measured",
         "tier": "moderate",
         "high_threshold": 0.2,
     },
     "vehicle": {
-        "probability": 0.03974,
-        "probability_ci95": [0.03278, 0.04662],
-        "heldout_auc": 0.8891,
+        "probability": 0.03996,
+        "probability_ci95": [0.03237, 0.04676],
+        "heldout_auc": 0.8888,
         "outcome": "anyone ISS15+",
-        "model": "field_iss15@3.3.1",
+        "model": "field_iss15@3.4.0",
         "tier": "moderate",
         "threshold": 0.01798,
         "high_threshold": 0.2,
@@ -140,17 +140,17 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
             },
             "triage": {
                 "iss15_plus": True,
-                "probability": 0.03974,
-                "probability_ci95": [0.03381, 0.04666],
+                "probability": 0.03996,
+                "probability_ci95": [0.03399, 0.04693],
                 "threshold": 0.01798,
                 "recommendation": "Vehicle telemetry consistent with severe injury "
                 "(2021 guideline, moderate risk): consider a "
                 "trauma center, which need not be the highest "
                 "level; EMS judgment and local protocol decide.",
                 "outcome": "ISS15+",
-                "model": "field_iss15@3.3.1",
+                "model": "field_iss15@3.4.0",
                 "operating_point": "sens85",
-                "unknown_inputs_range95": [0.02153, 0.04764],
+                "unknown_inputs_range95": [0.02176, 0.04797],
                 "knowledge": "adult_measured",
                 "tier": "moderate",
                 "high_threshold": 0.2,
@@ -232,8 +232,8 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
             "sha256": "b670eb94214f8538cb2bf5a286f617204aec2c091e667622dc418cd6b1ac7710",
         },
         "field_model": {
-            "version": "3.3.1",
-            "sha256": "9225df7c46014ee538a581441ccf80c9cc60ae88c24077b81df5205756bd2e52",
+            "version": "3.4.0",
+            "sha256": "9ab150a6a2abde1cb2c94310fcff737b6baa39f5f0dc04344edc74407f1af051",
         },
         "delta_v_measurement": {
             "version": "1.2.0",
@@ -249,7 +249,7 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         },
         "triage_code": {
             "version": "0.2.0",
-            "sha256": "e9521feeeb94fc558fc4bc515d002eb79bbb18bf18216f891c60d4ff3b31faa3",
+            "sha256": "09fb893d1133f738256499f0664f134f2933ae54728dc0ea8353793492975f0c",
         },
         "risk_calibration": {
             "version": "1",
@@ -261,7 +261,7 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         },
         "surrogate_evaluation": {
             "version": "7",
-            "sha256": "41f3094230e1b62c3af58ff6f138d5bcaace00ec3c3b74b66d8a53bd6e5365cd",
+            "sha256": "d4ec27117465c90811900c32d98fb220022f869986c5b0b85fafc1763892451c",
         },
     },
     "timings_ms": {"pulse": 0.179, "occupants": 21.25, "field_model": 1.327, "engine_total": 21.43},

@@ -60,6 +60,14 @@ def main(argv: Sequence[str] | None = None) -> int:
         "artifact of VERSION (models/offline/field/risk_decision.py); reuses the stage cache",
     )
     parser.add_argument(
+        "--selection-from",
+        default=None,
+        metavar="VERSION",
+        help="with --regions-from: take the drift choice and the ISS 15+ selection (groups, "
+        "penalty, kind, trees) of the shipped artifact of VERSION instead of re-running the "
+        "selection; every fold's model, the children's calibration and the figures are refitted",
+    )
+    parser.add_argument(
         "--check-measured",
         action="store_true",
         help="run only the held-out measured-delta-V check of the shipped artifact (no refit): "
@@ -76,10 +84,12 @@ def main(argv: Sequence[str] | None = None) -> int:
         else RiskConfig()
     )
     cache = None if args.no_cache else args.cache
+    if args.selection_from is not None and args.regions_from is None:
+        parser.error("--selection-from needs --regions-from (a decision-only refit)")
     if args.regions_from is not None:
         from models.offline.field.risk_decision import fit_decision
 
-        fit = fit_decision(cfg, cache, args.regions_from)
+        fit = fit_decision(cfg, cache, args.regions_from, args.selection_from)
     else:
         fit = fit_risk(cfg, cache_dir=cache)
     path = write_risk_artifact(fit.artifact, args.artifact)

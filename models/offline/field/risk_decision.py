@@ -27,6 +27,7 @@ card names the method).
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import replace
 from functools import partial
 from pathlib import Path
@@ -38,8 +39,14 @@ from tqdm import tqdm
 from models.arrays import FloatArray, IntArray
 from models.field.risk_children import CHILD_GROUPS
 from models.field.versions import artifact_for_version
+from models.offline.field.risk_children_fit import (
+    ChildrenAware,
+    children_calibration_of,
+    children_stage,
+)
 from models.offline.field.risk_fit import (
     REGRESSION_GROUPS,
+    AnyFitted,
     RiskConfig,
     RiskData,
     Spec,
@@ -68,8 +75,10 @@ from models.offline.field.risk_metrics import crash_resamples, score
 from models.offline.field.risk_run import (
     PLAIN_COLUMNS,
     RiskFit,
+    _cols,
     _diff_ci,
     _document,
+    _fixed_oof,
     _iss_extras,
     _oof_threshold_flags,
     _outcome_stage,
@@ -88,25 +97,106 @@ def decision_spec(selected: Spec) -> Spec:
     return replace(selected, groups=groups)
 
 
-def _fold_predictions(
+def _fold_models(
+    d: RiskData, y: FloatArray, spec: Spec, folds: list[tuple[IntArray, IntArray]], cfg: RiskConfig
+) -> list[AnyFitted]:
+    """Each fold's decision model, fitted on its training part."""
+    return [fit_spec(d, y, tr, spec, cfg) for tr, _ in tqdm(folds, desc="decision: fold models")]
+
+
+def _shared_oof(
+    d: RiskData, models: Sequence[AnyFitted], folds: list[tuple[IntArray, IntArray]]
+) -> FloatArray:
+    """Held-out P of each fold's model as fitted (the accident year as served), shape (n,)."""
+    p = np.empty(d.x.shape[0])
+    for f, (tr, te) in zip(models, folds, strict=True):
+        p[te] = f.probability(served_x(d, te, float(d.year[tr].max())))
+    return p
+
+
+def _sensed_only(
+    d: RiskData, models: Sequence[ChildrenAware], folds: list[tuple[IntArray, IntArray]]
+) -> FloatArray:
+    """Held-out P with age, sex, stature and mass unknown, integrated as served, shape (n,)."""
+    p = np.empty(d.x.shape[0])
+    for f, (tr, te) in tqdm(
+        list(zip(models, folds, strict=True)), desc="decision: integrated over unknown inputs"
+    ):
+        p[te] = integrated_probability(f, d, te, donor_table_of(d, tr), float(d.year[tr].max()))
+    return p
+
+
+def _served_folds(
     d: RiskData,
-    y: FloatArray,
+    cfg: RiskConfig,
+    cache: _Cache,
     spec: Spec,
     folds: list[tuple[IntArray, IntArray]],
-    cfg: RiskConfig,
-) -> dict[str, FloatArray]:
-    """Held-out P two ways, each fold's model fitted once (module docstring)."""
-    out = {k: np.empty(y.size) for k in ("oof", "sensed_only")}
-    for tr, te in tqdm(folds, desc="decision: folds by crash", leave=False):
-        f = fit_spec(d, y, tr, spec, cfg)
-        year = float(d.year[tr].max())
-        out["oof"][te] = f.probability(served_x(d, te, year))
-        table = donor_table_of(d, tr)
-        out["sensed_only"][te] = integrated_probability(f, d, te, table, year)
-    return out
+) -> tuple[dict[str, Any], list[ChildrenAware]]:
+    """The children's stage and each fold's model as served (children calibrated), cached."""
+    y = d.outcomes[0].y
+    models = cache.get("decision_fold_models", lambda: _fold_models(d, y, spec, folds, cfg))
+    shared = cache.get("decision_shared_oof", lambda: _shared_oof(d, models, folds))
+    groups = knowledge_groups(d)
+    children = cache.get(
+        "decision_children",
+        lambda: children_stage(
+            d,
+            y,
+            shared,
+            spec,
+            folds,
+            cfg,
+            PLAIN_COLUMNS,
+            {k: v for k, v in groups.items() if k.startswith("children")},
+        ),
+    )
+    aware = [
+        ChildrenAware(f, c) for f, c in zip(models, children["fold_coefficients"], strict=True)
+    ]
+    return children, aware
 
 
-def fit_decision(config: RiskConfig, cache_dir: Path | None, regions_from: str) -> RiskFit:
+def selection_from(
+    version: str, d: RiskData, folds: list[tuple[IntArray, IntArray]]
+) -> tuple[tuple[str, dict[str, Any]], dict[str, Any]]:
+    """The drift choice and the ISS 15+ selection of the artifact of `version`, as stages.
+
+    ``fit-field --regions-from R --selection-from V`` takes them instead of
+    re-running the selection (the costly part of the fit): the selected
+    groups, penalty, kind and trees, its selection, plain-regression and
+    delta-V-alone figures as that artifact holds them; the plain regression's
+    held-out probabilities (the subgroups' comparison) are refitted (cheap).
+    """
+    doc = _old_document(version)
+    iss = doc["outcomes"]["iss15"]
+    spec = Spec(
+        groups=tuple(iss.get("groups_selected") or iss["groups"]),
+        c=float(iss["penalty_c"]),
+        drift=str(doc["drift"]["chosen"]),
+        kind=str(iss["kind"]),
+        n_trees=int(iss.get("trees_per_member") or 0),
+        tree_groups=tuple(iss.get("tree_groups") or ()),
+        weight=float(iss["selection"].get("blend_weight") or 0.0),
+    )
+    plain_oof = _fixed_oof(d, d.outcomes[0].y, _cols(PLAIN_COLUMNS), folds, None)
+    selected = {
+        "spec": spec,
+        "selection": iss["selection"],
+        "plain": iss["plain"],
+        "plain_oof": plain_oof,
+        "delta_v_alone": iss["delta_v_alone"],
+        "selection_from": version,
+    }
+    return (spec.drift, doc["drift"]["inner_temporal"]), selected
+
+
+def fit_decision(
+    config: RiskConfig,
+    cache_dir: Path | None,
+    regions_from: str,
+    selection_from_version: str | None = None,
+) -> RiskFit:
     """Refit ISS 15+, carry the region models of `regions_from` (module docstring)."""
     cfg = config
     d = load_risk_data(cfg.subsample, cfg.seed)
@@ -114,15 +204,22 @@ def fit_decision(config: RiskConfig, cache_dir: Path | None, regions_from: str) 
     folds = crash_folds_cached(d, cfg)
     resamples = crash_resamples(d.crash, cfg.n_metric_bootstrap, cfg.seed + 1)
     iss = d.outcomes[0]
-    drift, drift_table = cache.get(
-        "drift", lambda: choose_drift(d, iss.y, REGRESSION_GROUPS, 1.0, cfg, folds)
-    )
-    selected = cache.get(
-        "outcome_iss15", lambda: _outcome_stage(d, iss, drift, folds, resamples, cfg)
-    )
+    if selection_from_version is not None:
+        (drift, drift_table), selected = cache.get(
+            f"selection_from_{selection_from_version}",
+            lambda: selection_from(selection_from_version, d, folds),
+        )
+    else:
+        drift, drift_table = cache.get(
+            "drift", lambda: choose_drift(d, iss.y, REGRESSION_GROUPS, 1.0, cfg, folds)
+        )
+        selected = cache.get(
+            "outcome_iss15", lambda: _outcome_stage(d, iss, drift, folds, resamples, cfg)
+        )
     spec = decision_spec(selected["spec"])
-    preds = cache.get("decision_folds", lambda: _fold_predictions(d, iss.y, spec, folds, cfg))
-    p = preds["oof"]
+    children, aware = _served_folds(d, cfg, cache, spec, folds)
+    sensed_only = cache.get("decision_sensed_only", lambda: _sensed_only(d, aware, folds))
+    p = children["oof"]
 
     def temporal() -> tuple[IntArray, FloatArray]:
         te, pt, _ = temporal_probability(
@@ -153,7 +250,9 @@ def fit_decision(config: RiskConfig, cache_dir: Path | None, regions_from: str) 
     figures["tiers"] = _tier_extras(d, stage, figures, folds, resamples, cfg)
     figures["knowledge"] = cache.get(
         "decision_knowledge",
-        lambda: knowledge_extras(d, stage, folds, cfg, PLAIN_COLUMNS, preds["sensed_only"]),
+        lambda: knowledge_extras(
+            d, stage, folds, cfg, PLAIN_COLUMNS, sensed_only, children["choice"]
+        ),
     )
     old = _old_document(regions_from)
     carried = {k: v for k, v in old["outcomes"].items() if k != "iss15"}
@@ -165,12 +264,15 @@ def fit_decision(config: RiskConfig, cache_dir: Path | None, regions_from: str) 
         "population": old["data"]["population"],
         "rows": old["data"]["rows"],
     }
+    if "selection_from" in selected:
+        doc["outcomes"]["iss15"]["selection_from"] = selected["selection_from"]
+    doc["children_calibration"] = children_calibration_of(children).to_document()
     from models.field.risk_model import canonical_content_sha256
 
     doc.pop("content_sha256", None)
     doc["content_sha256"] = canonical_content_sha256(doc)
-    figures["measured_check"] = _measured_stage(d, cfg, cache, spec, folds, doc)
-    oof = {"iss15": p, "iss15_sensed_only": preds["sensed_only"]}
+    figures["measured_check"] = _measured_stage(d, cfg, cache, aware, folds, doc)
+    oof = {"iss15": p, "iss15_sensed_only": sensed_only}
     return RiskFit(artifact=doc, figures=figures, oof=oof, data=d)
 
 
@@ -178,19 +280,11 @@ def _measured_stage(
     d: RiskData,
     cfg: RiskConfig,
     cache: _Cache,
-    spec: Spec,
+    fold_models: Sequence[Any],
     folds: list[tuple[IntArray, IntArray]],
     doc: dict[str, Any],
 ) -> dict[str, Any]:
-    """The measured-delta-V consistency check of `doc` (each fold's model kept as a stage)."""
-    y = d.outcomes[0].y
-    fold_models = cache.get(
-        "decision_fold_models",
-        lambda: [
-            fit_spec(d, y, tr, spec, cfg)
-            for tr, _ in tqdm(folds, desc="decision: fold models", leave=False)
-        ],
-    )
+    """The measured-delta-V consistency check of `doc` through each fold's model as served."""
 
     def simulate(reading: str) -> dict[str, FloatArray]:
         return measured_oof(
@@ -198,7 +292,7 @@ def _measured_stage(
         )
 
     sims = {
-        reading: cache.get(f"decision_measured_{reading}", partial(simulate, reading))
+        reading: cache.get(f"decision_measured_children_{reading}", partial(simulate, reading))
         for reading in READINGS
     }
     served = {
@@ -237,7 +331,16 @@ def check_served(doc: dict[str, Any], cache_dir: Path | None) -> dict[str, Any]:
     cfg = RiskConfig(**settings)
     d = load_risk_data(cfg.subsample, cfg.seed)
     cache = _Cache(cache_dir, cfg.key())
-    return _measured_stage(d, cfg, cache, served_spec(doc), crash_folds_cached(d, cfg), doc)
+    folds = crash_folds_cached(d, cfg)
+    spec = served_spec(doc)
+    models: Sequence[Any]
+    if "children_calibration" in doc:
+        _, models = _served_folds(d, cfg, cache, spec, folds)
+    else:  # an artifact before the children's calibration: each fold's model as fitted
+        models = cache.get(
+            "decision_fold_models", lambda: _fold_models(d, d.outcomes[0].y, spec, folds, cfg)
+        )
+    return _measured_stage(d, cfg, cache, models, folds, doc)
 
 
 def _old_document(version: str) -> dict[str, Any]:

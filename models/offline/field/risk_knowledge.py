@@ -178,6 +178,7 @@ def knowledge_extras(
     cfg: RiskConfig,
     plain_columns: Sequence[str],
     integrated: FloatArray,
+    children_choice: dict[str, Any] | None = None,
 ) -> dict[str, Any]:
     """Figures and thresholds by what is known (module docstring).
 
@@ -193,6 +194,10 @@ def knowledge_extras(
         child columns).
     integrated : ndarray, shape (n,)
         :func:`integrated_oof` of the ISS 15+ spec.
+    children_choice : dict, optional
+        The children's ways compared as the fit made them (each calibrated by age
+        group and child seat, :mod:`models.offline.field.risk_children_fit`);
+        without it, the three ways as fitted (artifacts before 3.4.0).
     """
     y, w, p, spec = d.outcomes[0].y, d.w, stage["oof"], stage["spec"]
     age = np.asarray(d.arrays["age_years"], dtype=np.float64)
@@ -213,43 +218,10 @@ def knowledge_extras(
         out["sensed_only"][name] = score(
             y[mask], integrated[mask], w[mask], [_local(ix, mask) for ix in r]
         )
-    # children: the shared model against a separate regression and the plain one
-    child_folds = _restricted(folds, child)
-    logistic = spec.part("logistic") if spec.kind == "blend" else spec
-    if logistic.kind != "logistic":
-        logistic = Spec(spec.groups, spec.c, spec.drift)
-    separate = _oof_of(lambda tr: fit_spec(d, y, tr, logistic, cfg), d, child_folds)
-    child_cols = [ALL_COLUMNS_3.index(c) for c in (*plain_columns, *_child_columns())]
-
-    def plain_fit(tr: IntArray) -> AnyFitted:
-        # columns constant among the training children (e.g. the clamped age) are dropped;
-        # near-collinear ones (stature and mass clamped at their floors) leave the Newton
-        # solver ill-conditioned, and scikit-learn then finishes with lbfgs (said, not wrong)
-        cols = [c for c in child_cols if c == 0 or np.ptp(d.x[tr, c]) > 0]
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", LinAlgWarning)
-            return fit_model(d.x[tr], y[tr], w[tr], cols, None)
-
-    plain = _oof_of(plain_fit, d, child_folds)
-    yc, wc = y[child], w[child]
-    out["children_choice"] = {
-        "shared_with_child_terms": {
-            "log_loss": log_loss(yc, p[child]),
-            **score(yc, p[child], wc, None),
-        },
-        "separate_regression": {
-            "log_loss": log_loss(yc, separate[child]),
-            **score(yc, separate[child], wc, None),
-        },
-        "plain_regression_on_children": {
-            "log_loss": log_loss(yc, plain[child]),
-            **score(yc, plain[child], wc, None),
-        },
-    }
-    out["children_choice"]["chosen"] = min(
-        ("shared_with_child_terms", "separate_regression"),
-        key=lambda k: out["children_choice"][k]["log_loss"],
-    )
+    if children_choice is not None:
+        out["children_choice"] = children_choice
+    else:
+        out["children_choice"] = _children_choice(d, y, p, spec, folds, cfg, plain_columns)
     # thresholds by knowledge, each with its own figures
     everyone = np.ones_like(child)
     samples = {"adult": (adult, p), "child": (child, p), "age_unknown": (everyone, integrated)}
@@ -275,6 +247,57 @@ def knowledge_extras(
             thresholds[op][know]["figures"] = figs
     out["thresholds_by_knowledge"] = thresholds
     return out
+
+
+def _children_choice(
+    d: RiskData,
+    y: FloatArray,
+    p: FloatArray,
+    spec: Spec,
+    folds: Sequence[tuple[IntArray, IntArray]],
+    cfg: RiskConfig,
+    plain_columns: Sequence[str],
+) -> dict[str, Any]:
+    """The shared model against a separate regression and the plain one, each as fitted."""
+    w = d.w
+    child = np.asarray(d.arrays["age_years"], dtype=np.float64) < CHILD_MAX_AGE_YEARS
+    child_folds = _restricted(folds, child)
+    logistic = spec.part("logistic") if spec.kind == "blend" else spec
+    if logistic.kind != "logistic":
+        logistic = Spec(spec.groups, spec.c, spec.drift)
+    separate = _oof_of(lambda tr: fit_spec(d, y, tr, logistic, cfg), d, child_folds)
+    child_cols = [ALL_COLUMNS_3.index(c) for c in (*plain_columns, *_child_columns())]
+
+    def plain_fit(tr: IntArray) -> AnyFitted:
+        # columns constant among the training children (e.g. the clamped age) are dropped;
+        # near-collinear ones (stature and mass clamped at their floors) leave the Newton
+        # solver ill-conditioned, and scikit-learn then finishes with lbfgs (said, not wrong)
+        cols = [c for c in child_cols if c == 0 or np.ptp(d.x[tr, c]) > 0]
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", LinAlgWarning)
+            return fit_model(d.x[tr], y[tr], w[tr], cols, None)
+
+    plain = _oof_of(plain_fit, d, child_folds)
+    yc, wc = y[child], w[child]
+    choice: dict[str, Any] = {
+        "shared_with_child_terms": {
+            "log_loss": log_loss(yc, p[child]),
+            **score(yc, p[child], wc, None),
+        },
+        "separate_regression": {
+            "log_loss": log_loss(yc, separate[child]),
+            **score(yc, separate[child], wc, None),
+        },
+        "plain_regression_on_children": {
+            "log_loss": log_loss(yc, plain[child]),
+            **score(yc, plain[child], wc, None),
+        },
+    }
+    choice["chosen"] = min(
+        ("shared_with_child_terms", "separate_regression"),
+        key=lambda k: choice[k]["log_loss"],
+    )
+    return choice
 
 
 def knowledge_groups(d: RiskData) -> dict[str, np.ndarray]:

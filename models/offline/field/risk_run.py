@@ -90,7 +90,11 @@ MODEL_NAME: Final[str] = "field_iss15"
 #: through the measurement model 1.2.0 (a side crash's ratio of its own, Johnson &
 #: Gabler), and the held-out check of that reading with measured delta-V
 #: (:mod:`.risk_measured`, the model card and ``docs/field/measured_check.json``).
-MODEL_VERSION: Final[str] = "3.3.1"
+#: 3.4.0 (2026-12-07): the same shared model (3.3.1's selection, ``--selection-from``),
+#: with the children's own calibration by age group and child seat, with the weights
+#: (:mod:`models.field.children_calibration`); the thresholds by knowledge and every
+#: held-out figure follow it.
+MODEL_VERSION: Final[str] = "3.4.0"
 
 #: Groups of the plain regression: linear main effects of every notification
 #: field, unpenalised, no splines or interactions (the reference to match).
