@@ -9,9 +9,10 @@ delta-V, children, several occupants), extracts those fields from the service's
 answer, and writes them (``python -m tests.decision_pins``) to
 ``tests/decision_pins.json``, with the occupant models' explanation beside them.
 Floats are stored as JSON numbers written by :func:`repr` (which reads back to
-the same double) and as :meth:`float.hex`. The pins were written at commit
-90e87cc, before the speed-up; ``tests/service/cases/test_decision_pins.py`` holds
-the answers to them.
+the same double) and as :meth:`float.hex`. The pins are written at the commit the
+file names, by a model release only (field model 3.4.0 rewrote them: its answers
+are not 3.3.1's); a speed-up holds the answers to them bit for bit
+(``tests/service/cases/test_decision_pins.py``).
 """
 
 from __future__ import annotations
