@@ -139,9 +139,14 @@ def weighted_part(local: LocalOutcomes) -> None:
     plan_half = precision_plan(half.probability, half.serious, half.weight)
     _say(f"recalibration, all crashes: {plan.reason}")
     _say(f"recalibration, half of the shifted crashes: {plan_half.reason}")
+    curves = {"as they are": calibration(local), "odds halved": calibration(shifted)}
+    for name, cal in curves.items():
+        lo, hi = cal.observed_over_predicted_ci95 or (float("nan"), float("nan"))
+        ratio = cal.observed_over_predicted or float("nan")
+        _say(f"weighted O/P, {name}: {ratio:.2f} ({lo:.2f}-{hi:.2f})")
     plot(
         OUT / "weighted.png",
-        {"as they are": calibration(local), "odds halved": calibration(shifted)},
+        curves,
         f"NASS-CDS 2011-2014, survey weights: served model {load_default().version}",
     )
 

@@ -107,8 +107,10 @@ def test_as_they_are_the_alarm_is_silent_and_calibration_holds(local: LocalOutco
     assert cal.observed_over_predicted_ci95 is not None
     low, high = cal.observed_over_predicted_ci95
     assert low < 1.0 < high
+    # the served model's (3.4.0) weighted predicted/observed on these crashes: docs/outcomes.md
+    # gives its inverse, observed/predicted 1.05
     assert weighted_ratio(local.probability, local.serious, local.weight) == pytest.approx(
-        0.917, abs=0.01
+        0.952, abs=0.01
     )
 
 
