@@ -170,15 +170,7 @@ def selection_from(
     """
     doc = _old_document(version)
     iss = doc["outcomes"]["iss15"]
-    spec = Spec(
-        groups=tuple(iss.get("groups_selected") or iss["groups"]),
-        c=float(iss["penalty_c"]),
-        drift=str(doc["drift"]["chosen"]),
-        kind=str(iss["kind"]),
-        n_trees=int(iss.get("trees_per_member") or 0),
-        tree_groups=tuple(iss.get("tree_groups") or ()),
-        weight=float(iss["selection"].get("blend_weight") or 0.0),
-    )
+    spec = replace(served_spec(doc), groups=tuple(iss.get("groups_selected") or iss["groups"]))
     plain_oof = _fixed_oof(d, d.outcomes[0].y, _cols(PLAIN_COLUMNS), folds, None)
     selected = {
         "spec": spec,

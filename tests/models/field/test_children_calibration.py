@@ -14,6 +14,7 @@ from models.field.model import canonical_content_sha256
 from models.field.risk_children import ChildRiskInputs, Restraint
 from models.field.risk_features import AirbagCode, SeatSide
 from models.field.risk_model import RiskModel, load_default
+from tests.models.field.inputs import occupant_inputs
 
 
 @pytest.fixture(scope="module")
@@ -22,25 +23,9 @@ def model() -> RiskModel:
 
 
 def _occupant(**kw: object) -> ChildRiskInputs:
-    base: dict[str, object] = {
-        "delta_v_kmh": 45.0,
-        "pdof_deg": 0.0,
-        "seat_row": 2,
-        "seat_side": SeatSide.LEFT,
-        "driver": False,
-        "belted": True,
-        "frontal_airbag": AirbagCode.NONE,
-        "rollover": False,
-        "multiple_impacts": False,
-        "restraint": Restraint.BELTED,
-        "age_years": 42.0,
-        "female": False,
-        "stature_cm": 178.0,
-        "mass_kg": 80.0,
-        "model_year": 2010,
-    }
-    base.update(kw)
-    return ChildRiskInputs(**base)  # type: ignore[arg-type]
+    """A rear-left passenger (no frontal airbag), `kw` overriding."""
+    rear = {"seat_row": 2, "seat_side": SeatSide.LEFT, "frontal_airbag": AirbagCode.NONE}
+    return occupant_inputs(**{**rear, **kw})
 
 
 def _logit(p: float) -> float:

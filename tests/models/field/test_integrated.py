@@ -7,9 +7,10 @@ import dataclasses
 import numpy as np
 import pytest
 
-from models.field.risk_children import ALL_COLUMNS_3, ChildRiskInputs, Restraint
+from models.field.risk_children import ALL_COLUMNS_3, Restraint
 from models.field.risk_features import AirbagCode, SeatSide
 from models.field.risk_model import KNOWLEDGE, RiskModel, load_default
+from tests.models.field.inputs import occupant_inputs
 
 
 @pytest.fixture(scope="module")
@@ -17,26 +18,7 @@ def model() -> RiskModel:
     return load_default()
 
 
-def _adult(**kw: object) -> ChildRiskInputs:
-    base: dict[str, object] = {
-        "delta_v_kmh": 45.0,
-        "pdof_deg": 0.0,
-        "seat_row": 1,
-        "seat_side": SeatSide.RIGHT,
-        "driver": False,
-        "belted": True,
-        "frontal_airbag": AirbagCode.DEPLOYED,
-        "rollover": False,
-        "multiple_impacts": False,
-        "restraint": Restraint.BELTED,
-        "age_years": 42.0,
-        "female": False,
-        "stature_cm": 178.0,
-        "mass_kg": 80.0,
-        "model_year": 2010,
-    }
-    base.update(kw)
-    return ChildRiskInputs(**base)  # type: ignore[arg-type]
+_adult = occupant_inputs
 
 
 def test_the_shipped_model_is_feature_set_3_with_donors_and_thresholds_by_knowledge(
