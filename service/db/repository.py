@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import re
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from datetime import datetime
 from typing import Any
@@ -384,6 +384,67 @@ def current_outcomes(
 
 #: Case ids per ``IN (...)`` list: well under SQLite's 32,766 bound variables.
 _IN_CHUNK = 500
+
+
+@dataclass(frozen=True)
+class LinkedDecision:
+    """One stored occupant's decision with its current outcome (the recalibration's row)."""
+
+    case_id: str
+    seat: str
+    models: dict[str, Any]
+    probability: float
+    iss: int | None
+    weight: float
+
+
+def linked_decisions(session: Session, chunk: int = 1000) -> Iterator[LinkedDecision]:
+    """Every stored occupant with an outcome, its decision and its current outcome (the
+    latest revision), cases oldest first and occupants in seat order.
+
+    Streamed (``yield_per``): only linked occupants' columns and their case's model record
+    are read, never a case's notification or answer, so a year of cases is not held in
+    memory.
+    """
+    latest = (
+        select(
+            OccupantOutcome.case_id,
+            OccupantOutcome.position,
+            func.max(OccupantOutcome.revision).label("revision"),
+        )
+        .group_by(OccupantOutcome.case_id, OccupantOutcome.position)
+        .subquery()
+    )
+    stmt = (
+        select(
+            Case.id,
+            CaseOccupant.seat,
+            Case.models,
+            CaseOccupant.probability,
+            OccupantOutcome.iss,
+            OccupantOutcome.weight,
+        )
+        .join(CaseOccupant, CaseOccupant.case_id == Case.id)
+        .join(
+            latest,
+            and_(
+                latest.c.case_id == CaseOccupant.case_id,
+                latest.c.position == CaseOccupant.position,
+            ),
+        )
+        .join(
+            OccupantOutcome,
+            and_(
+                OccupantOutcome.case_id == latest.c.case_id,
+                OccupantOutcome.position == latest.c.position,
+                OccupantOutcome.revision == latest.c.revision,
+            ),
+        )
+        .order_by(Case.received_at, Case.id, CaseOccupant.position)
+        .execution_options(yield_per=chunk)
+    )
+    for row in session.execute(stmt):
+        yield LinkedDecision(*row)
 
 
 def quality_rows(

@@ -75,29 +75,22 @@ class LinkedOutcomes:
 
 
 def linked_outcomes(sessions: sessionmaker[Session], artifact_sha256: str) -> LinkedOutcomes:
-    """Every stored occupant decided by the artifact of `artifact_sha256` with an outcome."""
+    """Every stored occupant decided by the artifact of `artifact_sha256` with an outcome
+    (streamed from the store: :func:`service.db.repository.linked_decisions`)."""
     occupants: list[str] = []
     crash: list[str] = []
     p: list[float] = []
     y: list[float] = []
     w: list[float] = []
     with sessions() as session:
-        cases = [
-            c
-            for c in repository.quality_rows(session)
-            if (c.models.get(FIELD_MODEL_KEY) or {}).get("sha256") == artifact_sha256
-        ]
-        outcomes = repository.current_outcomes(session, [c.id for c in cases])
-        for case in cases:
-            for occupant in case.occupants:
-                outcome = outcomes.get((case.id, occupant.position))
-                if outcome is None:
-                    continue
-                occupants.append(f"{case.id}:{occupant.seat}")
-                crash.append(case.id)
-                p.append(occupant.probability)
-                y.append(1.0 if outcome.iss is not None and outcome.iss >= SERIOUS_ISS else 0.0)
-                w.append(outcome.weight)
+        for row in repository.linked_decisions(session):
+            if (row.models.get(FIELD_MODEL_KEY) or {}).get("sha256") != artifact_sha256:
+                continue
+            occupants.append(f"{row.case_id}:{row.seat}")
+            crash.append(row.case_id)
+            p.append(row.probability)
+            y.append(1.0 if row.iss is not None and row.iss >= SERIOUS_ISS else 0.0)
+            w.append(row.weight)
     return LinkedOutcomes(tuple(occupants), tuple(crash), np.array(p), np.array(y), np.array(w))
 
 

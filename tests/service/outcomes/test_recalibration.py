@@ -233,3 +233,36 @@ def test_recalibrate_refuses_then_writes_a_version_rescore_compares_and_serves(
             assert (o_new["triage"]["tier"] == "high") == (
                 o_new["triage"]["iss15_plus"] and p_new >= 0.2
             )
+
+
+def test_linked_outcomes_stream_each_linked_occupants_latest_revision(env_api: ApiClient) -> None:
+    """The recalibration's rows: only occupants with an outcome, the current revision of a
+    corrected one, the served model's decided probability, cases in the order received."""
+    from service.cli.common import open_sessions
+    from service.outcomes.recalibrate import linked_outcomes
+
+    occupants = _submit(env_api, range(900, 903))  # 3 cases x 7 occupants
+    linked = [occupants[0], occupants[2], occupants[8], occupants[15]]
+
+    def put(case_id: str, seat: str, iss: int) -> None:
+        body = {"iss": iss, "source": "trauma_registry", "recorded_at": "2026-12-01T10:00:00Z"}
+        r = env_api.client.put(
+            f"/v1/cases/{case_id}/occupants/{seat}/outcome",
+            json=body,
+            headers=env_api.headers("registry"),
+        )
+        assert r.status_code in (200, 201), r.text
+
+    for case_id, seat, _ in linked:
+        put(case_id, seat, 4)
+    put(linked[1][0], linked[1][1], 17)  # a correction: ISS 4 -> 17 (revision 2)
+    sha = load_default().sha256
+    with open_sessions() as sessions:
+        rows = linked_outcomes(sessions, sha)
+        other = linked_outcomes(sessions, "0" * 64)
+    assert rows.occupants == tuple(f"{c}:{s}" for c, s, _ in linked)
+    assert rows.crash == tuple(c for c, _, _ in linked)
+    assert rows.probability.tolist() == [p for _, _, p in linked]
+    assert rows.serious.tolist() == [0.0, 1.0, 0.0, 0.0]
+    assert rows.weight.tolist() == [1.0] * 4
+    assert other.occupants == ()  # decided by another artifact: none
