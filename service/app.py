@@ -126,7 +126,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
             if ctx.migration is not None:
                 ctx.migration.stop()
             metrics.registry.unregister(drift)
-            db_engine.dispose()
+            ctx.close_store()
 
     app = FastAPI(
         title="aacn-triage",

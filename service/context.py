@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 
 from sqlalchemy import Engine
 from sqlalchemy.orm import Session, sessionmaker
+from sqlalchemy.pool import Pool
 
 from models.field.model import WITHDRAWN_VERSIONS
 from models.tiers import check_threshold_order
@@ -140,6 +141,9 @@ class ServiceContext:
     migration: MigrationRetry | None = None
     _last_reset: float = 0.0
     _reset_lock: threading.Lock = field(default_factory=threading.Lock)
+    #: Pools replaced by a reset: the connections checked out at the reset return to
+    #: them, and are closed at the next reset or at shutdown (:meth:`close_store`).
+    _retired_pools: list[Pool] = field(default_factory=list)
 
     def reset_store_connections(self) -> None:
         """Drop pooled connections after a store error (at most once a second).
@@ -152,5 +156,20 @@ class ServiceContext:
             if now - self._last_reset < POOL_RESET_MIN_INTERVAL_S:
                 return
             self._last_reset = now
-        log.warning("store error: resetting the connection pool")
+            log.warning("store error: resetting the connection pool")
+            # dispose() closes the pool's idle connections and starts a new pool; those
+            # checked out now come back to the old one, which only the garbage collector
+            # would close: keep it, and close what has come back at the next reset
+            retired = self.db_engine.pool
+            self.db_engine.dispose()
+            for pool in self._retired_pools:
+                pool.dispose()
+            self._retired_pools = [retired]
+
+    def close_store(self) -> None:
+        """Close every pooled connection, those of pools replaced by a reset included."""
+        with self._reset_lock:
+            for pool in self._retired_pools:
+                pool.dispose()
+            self._retired_pools = []
         self.db_engine.dispose()
