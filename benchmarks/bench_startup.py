@@ -9,6 +9,11 @@ empty cache (it compiles every kernel); warm: the build's warm-up step first (th
 models loaded as ``serve`` loads them, which fills the cache), then ``serve`` with
 that cache. Time from the process start to the first 200 of ``/readyz``; R
 alternated rounds, the median kept.
+
+``--checksums``: the warm start alone, with the numba cache filled, alternating
+between the code checksums kept in it (``models.codehash``: the warm-up step
+wrote them) and their entries removed (every source parsed, as before they were
+kept); prints the figures, writes nothing.
 """
 
 from __future__ import annotations
@@ -72,10 +77,41 @@ def _ready_after(env: dict[str, str], work: Path) -> float:
         proc.wait(timeout=60)
 
 
+def _checksums(env: dict[str, str], work: Path, cache: Path, rounds: int) -> None:
+    """Warm starts with the code checksums kept and with them removed, alternated."""
+    subprocess.run([sys.executable, "-c", WARM_UP], env=env, check=True, timeout=600)
+    kept = sorted((cache / "codehash").glob("*.sha256"))
+    if not kept:
+        raise SystemExit("the warm-up step kept no code checksum")
+    saved = {p.name: p.read_bytes() for p in kept}
+    times: dict[str, list[float]] = {"kept": [], "removed": []}
+    loads = []
+    for _ in range(rounds):
+        shutil.rmtree(cache / "codehash")
+        times["removed"].append(_ready_after(env, work))
+        (cache / "codehash").mkdir(exist_ok=True)  # the start above wrote them again:
+        for name, data in saved.items():  # the same entries as the warm-up step's
+            (cache / "codehash" / name).write_bytes(data)
+        times["kept"].append(_ready_after(env, work))
+        loads.append(os.getloadavg()[0])
+        print({k: [round(x, 2) for x in v] for k, v in times.items()}, file=sys.stderr)
+    now = datetime.now(UTC).strftime("%Y-%m-%d %H:%M UTC")
+    removed, kept_s = statistics.median(times["removed"]), statistics.median(times["kept"])
+    print(
+        f"{now}, {platform.machine()}, {os.cpu_count()} CPUs, Python "
+        f"{platform.python_version()}; load average {min(loads):.1f}-{max(loads):.1f}; "
+        f"{rounds} alternated rounds, median start to ready: {len(saved)} code checksums "
+        f"removed {removed:.2f} s, kept {kept_s:.2f} s ({removed - kept_s:+.2f} s)"
+    )
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--rounds", type=int, default=2, help="alternated rounds")
     parser.add_argument("--no-write", action="store_true", help="print only")
+    parser.add_argument(
+        "--checksums", action="store_true", help="warm starts, code checksums kept or not"
+    )
     args = parser.parse_args()
     work = Path(tempfile.mkdtemp(prefix="bench-startup-"))
     cache = work / "numba"
@@ -86,6 +122,12 @@ def main() -> None:
         "AACN_NUMBA_CACHE_DIR": str(cache),
         "AACN_SPOOL_PATH": str(work / "spool.db"),
     }
+    if args.checksums:
+        try:
+            _checksums(env, work, cache, args.rounds)
+        finally:
+            shutil.rmtree(work, ignore_errors=True)
+        return
     times: dict[str, list[float]] = {"cold": [], "warm": [], "warm-up step": []}
     loads = []
     try:

@@ -70,6 +70,7 @@ def engine_models_for(settings: Settings, *, occupant_models: bool = True) -> En
         surrogate_dir=settings.surrogate_dir,
         use_surrogates=occupant_models,
         blas_threads=settings.blas_threads,
+        occupant_threads=settings.occupant_threads,
     )
     field = models.field
     if (

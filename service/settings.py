@@ -143,6 +143,13 @@ class Settings(BaseSettings):
         description="BLAS threads per process for the engine's matrix products (one: they are "
         "small, and several worker processes share the cores; `service.context`).",
     )
+    occupant_threads: int | None = Field(
+        default=None,
+        ge=1,
+        description="Occupants of one notification whose occupant models run at once (the "
+        "request's thread and a shared pool of helpers; the answer is the same bits); 1: one "
+        "after the other; None: min(2, the CPU count). A batch on several processes uses 1.",
+    )
     workers: int | None = Field(
         default=None, ge=1, description="Worker processes of `serve`; None: the CPU count."
     )

@@ -3,8 +3,10 @@ and the checksum of the orchestration code itself (``triage_code``)."""
 
 from __future__ import annotations
 
+import os
 from collections.abc import Mapping
 from dataclasses import dataclass
+from dataclasses import field as dataclass_field
 from functools import lru_cache
 from pathlib import Path
 
@@ -39,6 +41,7 @@ from models.triage.result import ModelInfo
 
 __all__ = [
     "TRIAGE_SOURCES",
+    "default_occupant_threads",
     "triage_code_sha256",
     "EngineModels",
     "operating_thresholds",
@@ -92,6 +95,20 @@ def triage_code_sha256() -> str:
     return sources_sha256(TRIAGE_SOURCES)
 
 
+#: Most occupants of one notification computed at once by default. [R] Much of
+#: one occupant's occupant-model work (the LPM kernel, the surrogates' BLAS
+#: products and compiled order statistics) releases the GIL: with two, a
+#: two-occupant triage took 0.86 of one thread's wall time and 1.2 times its CPU
+#: on this 2-core box when a core was free (``benchmarks/bench_occupant_threads.py``,
+#: ``benchmarks/RESULTS.md``, "Speed (issue 51): where the time goes").
+MAX_DEFAULT_OCCUPANT_THREADS = 2
+
+
+def default_occupant_threads() -> int:
+    """``min(2, CPU count)``: the occupants of a notification computed at once by default."""
+    return min(MAX_DEFAULT_OCCUPANT_THREADS, os.cpu_count() or 1)
+
+
 @dataclass(frozen=True)
 class EngineModels:
     """Every model the engine answers with, loaded once at start.
@@ -120,6 +137,11 @@ class EngineModels:
         (:mod:`models.tiers`); never below an operating threshold in use.
     posture_sd_deg, seat_track_sd_mm : float
         Sensor standard deviations used when a notification gives none.
+    occupant_threads : int
+        Most occupants of one notification whose occupant models run at once
+        (the calling thread and a process-wide pool of ``occupant_threads - 1``
+        helpers, :func:`models.triage.run._evidences`); 1: one after the other.
+        The answer is the same bits either way.
     """
 
     baseline: BaselineModel
@@ -131,6 +153,11 @@ class EngineModels:
     high_threshold: float = HIGH_RISK_THRESHOLD
     posture_sd_deg: float = DEFAULT_POSTURE_SD_DEG
     seat_track_sd_mm: float = DEFAULT_SEAT_TRACK_SD_MM
+    occupant_threads: int = dataclass_field(default_factory=default_occupant_threads)
+
+    def __post_init__(self) -> None:
+        if self.occupant_threads < 1:
+            raise ValueError(f"occupant_threads must be at least 1, not {self.occupant_threads}")
 
     @property
     def vehicle_models(self) -> frozenset[str]:
@@ -239,6 +266,7 @@ def load_engine_models(
     use_field: bool = True,
     warm: bool = True,
     blas_threads: int | None = 1,
+    occupant_threads: int | None = None,
 ) -> EngineModels:
     """Load and verify the shipped model artifacts, and warm the compiled kernels.
 
@@ -253,6 +281,10 @@ def load_engine_models(
     ``service.context.limit_blas_threads``, measured there 2026-12-04). One
     thread is also what the service runs, so a triage in any process gives the
     service's bits.
+
+    `occupant_threads` (None: :func:`default_occupant_threads`) is how many
+    occupants of one notification run their occupant models at once
+    (:attr:`EngineModels.occupant_threads`).
 
     Raises
     ------
@@ -292,6 +324,8 @@ def load_engine_models(
     evaluation_sha256()
     if warm:
         warm_up()
+    if occupant_threads is None:
+        occupant_threads = default_occupant_threads()
     return EngineModels(
         baseline=load_default(),
         parameter_sets=parameter_sets,
@@ -302,6 +336,7 @@ def load_engine_models(
         high_threshold=high_threshold,
         posture_sd_deg=posture_sd_deg,
         seat_track_sd_mm=seat_track_sd_mm,
+        occupant_threads=occupant_threads,
     )
 
 

@@ -3,7 +3,10 @@
 from __future__ import annotations
 
 import dataclasses
+import os
+import threading
 import time
+from concurrent.futures import Future, ThreadPoolExecutor
 
 from models import ENGINE_VERSION
 from models.assumptions import Assumption, AssumptionCode
@@ -13,7 +16,7 @@ from models.notification import (
     CrashNotification,
     Occupant,
 )
-from models.pulse import process_pulse
+from models.pulse import ProcessedPulse, process_pulse
 from models.tiers import child_recommendation, tier_of
 from models.triage.decision import (
     _field_decision,
@@ -42,6 +45,90 @@ from models.triage.result import (
 )
 
 __all__ = ["triage"]
+
+
+#: The helper threads the occupants of a notification share (with the calling
+#: thread), by size, in this process; made on first use. Keyed by the process id
+#: as well: a forked child (the batch's worker processes) inherits a pool object
+#: whose threads it does not have, and makes its own.
+_POOLS: dict[tuple[int, int], ThreadPoolExecutor] = {}
+_POOLS_LOCK = threading.Lock()
+
+
+def _helper_pool(helpers: int) -> ThreadPoolExecutor:
+    """The process's pool of `helpers` threads (one per size, shared by every request)."""
+    key = (os.getpid(), helpers)
+    with _POOLS_LOCK:
+        pool = _POOLS.get(key)
+        if pool is None:
+            pool = ThreadPoolExecutor(max_workers=helpers, thread_name_prefix="aacn-occupant")
+            _POOLS[key] = pool
+    return pool
+
+
+def _after_fork_in_child() -> None:
+    global _POOLS_LOCK
+    _POOLS_LOCK = threading.Lock()  # a parent's thread may have held it at the fork
+
+
+os.register_at_fork(after_in_child=_after_fork_in_child)
+
+
+def _evidences(
+    notification: CrashNotification,
+    pulse: ProcessedPulse,
+    models: EngineModels,
+    occupant_models: bool,
+) -> tuple[list[OccupantEvidence], list[Assumption]]:
+    """Every occupant's evidence and the assumptions it noted, in occupant order.
+
+    The occupants are independent of one another (their occupant-model runs and
+    surrogate propagations read only the notification and the loaded, immutable
+    models), so up to ``models.occupant_threads`` of them are computed at once: the
+    calling thread and helper threads take the next occupant in turn, each noting
+    its assumptions in a list of its own, and the lists are joined in occupant
+    order. Each occupant's arithmetic is the same on any thread (the compiled
+    kernels release the GIL and keep no state; BLAS runs one thread per call), so
+    the result is that of one thread, bit for bit. A helper task never waits on
+    the pool; one still queued behind other requests' when the calling thread has
+    taken every occupant is cancelled, not waited for.
+    """
+    occupants = notification.occupants
+    n = len(occupants)
+    noted: list[list[Assumption]] = [[] for _ in range(n)]
+    done: list[OccupantEvidence | None] = [None] * n
+    failed: list[BaseException | None] = [None] * n
+    next_index = iter(range(n))
+    take = threading.Lock()
+
+    def work() -> None:
+        while True:
+            with take:
+                i = None if any(failed) else next(next_index, None)
+            if i is None:
+                return
+            try:
+                done[i] = _occupant_evidence(
+                    i, occupants[i], notification, pulse, models, noted[i], occupant_models
+                )
+            except BaseException as exc:  # raised below in occupant order, as one thread would
+                with take:
+                    failed[i] = exc
+
+    helpers = min(models.occupant_threads, n) - 1 if occupant_models else 0
+    tasks: list[Future[None]] = []
+    if helpers > 0:
+        pool = _helper_pool(models.occupant_threads - 1)
+        tasks = [pool.submit(work) for _ in range(helpers)]
+    work()
+    for task in tasks:
+        if not task.cancel():
+            task.result()
+    for exc in failed:
+        if exc is not None:
+            raise exc
+    evidences = [e for e in done if e is not None]
+    return evidences, [a for occupant in noted for a in occupant]
 
 
 def _used_models(models: EngineModels, vehicle_model: str, used_lpm: bool) -> dict[str, ModelInfo]:
@@ -169,10 +256,8 @@ def triage(
     occupants: list[OccupantTriage] = []
     risk_predictions: list[RiskPrediction] = []
     field_ms = 0.0
-    evidences = [
-        _occupant_evidence(i, occupant, notification, pulse, models, assumptions, occupant_models)
-        for i, occupant in enumerate(notification.occupants)
-    ]
+    evidences, noted = _evidences(notification, pulse, models, occupant_models)
+    assumptions.extend(noted)
     if isinstance(field_model, RiskModel):  # every occupant at once: one walk of the trees
         tf = time.perf_counter()
         all_inputs = [risk_inputs(o, notification, pulse) for o in notification.occupants]

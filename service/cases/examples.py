@@ -249,7 +249,7 @@ EXAMPLE_CASE_RESULT: dict[str, Any] = {
         },
         "triage_code": {
             "version": "0.2.0",
-            "sha256": "09fb893d1133f738256499f0664f134f2933ae54728dc0ea8353793492975f0c",
+            "sha256": "5c92f797feb403293e3c154ab8621410bd774c39b0fb199fa78c14bdad72611c",
         },
         "risk_calibration": {
             "version": "1",

@@ -151,6 +151,9 @@ def run_batch(
     failures = 0
     todo = list(enumerate(lines[done:], start=done + 1))
     workers = max(1, min(workers, len(todo)))
+    if workers > 1 and settings.occupant_threads is None:
+        # the processes fill the cores: an occupant's helper thread would only wait for one
+        settings = settings.model_copy(update={"occupant_threads": 1})
     task = functools.partial(_batch_line, settings, reproducible, decision_only)
     models_for(settings, occupant_models=not decision_only)  # forked workers inherit them
     with (

@@ -6,15 +6,19 @@ stored figures within a tolerance. On one machine, with one build of the
 libraries, the answer must not depend on anything else: the service's result JSON
 (everything but the per-step timings) is the same bytes when the notification is
 evaluated twice in one process, and in two fresh processes with different hash
-seeds (set and dict iteration orders) and BLAS thread counts.
+seeds (set and dict iteration orders) and BLAS thread counts, and whether the
+occupants of a notification are computed one after the other or on several
+threads, one request at a time or several at once.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import os
 import subprocess
 import sys
+from concurrent.futures import ThreadPoolExecutor
 from datetime import UTC, datetime
 
 import pytest
@@ -108,3 +112,39 @@ def test_same_notification_in_two_processes_gives_the_same_bytes(models: EngineM
     assert len(lines) == len(texts)
     # and the same bytes as this process (the service's own serialisation)
     assert lines == [_result_bytes(t, models) for t in texts]
+
+
+def _occupant_rich_notifications() -> list[str]:
+    """The documented examples and the pinned notifications (several with two or more
+    occupants in the occupant models' coverage, and rear seats), fixed event ids."""
+    from tests.decision_pins import notifications
+
+    pinned = [
+        json.dumps({**doc, "event_id": f"threads-{name}"})
+        for name, doc in sorted(notifications().items())
+    ]
+    return _notifications() + pinned
+
+
+def test_occupants_on_several_threads_give_the_same_bytes(models: EngineModels) -> None:
+    texts = _occupant_rich_notifications()
+    assert any(len(json.loads(t)["occupants"]) >= 2 for t in texts)
+    one = dataclasses.replace(models, occupant_threads=1)
+    expected = [_result_bytes(t, one) for t in texts]
+    for threads in (2, 3):
+        several = dataclasses.replace(models, occupant_threads=threads)
+        assert [_result_bytes(t, several) for t in texts] == expected, threads
+
+
+def test_concurrent_requests_sharing_the_occupant_pool_give_the_same_bytes(
+    models: EngineModels,
+) -> None:
+    """Requests on several threads at once (as `serve` runs them), every one handing
+    occupants to the same helper pool: each answer is the one-thread answer."""
+    texts = _occupant_rich_notifications()
+    one = dataclasses.replace(models, occupant_threads=1)
+    expected = {t: _result_bytes(t, one) for t in texts}
+    several = dataclasses.replace(models, occupant_threads=2)
+    with ThreadPoolExecutor(max_workers=4) as requests:
+        answers = list(requests.map(lambda t: (t, _result_bytes(t, several)), texts * 3))
+    assert all(answer == expected[t] for t, answer in answers)
