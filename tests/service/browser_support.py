@@ -24,7 +24,7 @@ import sys
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, NoReturn
 
 import httpx2 as httpx
 import pytest
@@ -76,13 +76,26 @@ def _chromium_candidates() -> list[str | None]:
     return found
 
 
+#: Set (to 1) where the browser tests must run, as in CI (``.ci/run`` installs Chromium):
+#: no Chromium is then a failure, not a skip.
+REQUIRE_BROWSER_ENV = "AACN_REQUIRE_BROWSER"
+
+
+def _no_browser(reason: str) -> NoReturn:
+    """Skip, on a machine without Chromium; fail where the browser tests are required."""
+    if os.environ.get(REQUIRE_BROWSER_ENV) == "1":
+        pytest.fail(f"{REQUIRE_BROWSER_ENV}=1 but {reason}")
+    pytest.skip(reason)
+
+
 @pytest.fixture(scope="module")
 def chromium() -> Iterator[Any]:
-    """A running headless Chromium, or a skip that says why none could be started."""
+    """A running headless Chromium, or a skip (a failure where required) that says why
+    none could be started."""
     try:
         from playwright.sync_api import Error, sync_playwright
-    except ImportError as exc:  # pragma: no cover - playwright is in the test extra
-        pytest.skip(f"no Chromium can be started: the playwright package is missing ({exc})")
+    except ImportError as exc:  # playwright is in the test extra
+        _no_browser(f"no Chromium can be started: the playwright package is missing ({exc})")
     manager = sync_playwright().start()
     reasons = []
     browser = None
@@ -97,7 +110,7 @@ def chromium() -> Iterator[Any]:
             reasons.append(f"{exe or 'Playwright-managed Chromium'}: {first}")
     if browser is None:
         manager.stop()
-        pytest.skip("no Chromium can be started (apt-get install chromium): " + "; ".join(reasons))
+        _no_browser("no Chromium can be started (apt-get install chromium): " + "; ".join(reasons))
     try:
         yield browser
     finally:
